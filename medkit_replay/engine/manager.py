@@ -1,0 +1,248 @@
+"""The fault manager node on bag time: validation, debounce, correlation, FaultEvents, clears.
+
+Pure: consumes timestamped requests and ticks, appends records to an EngineOutput.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from medkit_replay.engine.correlation.engine import CorrelationEngine, severity_name
+from medkit_replay.engine.correlation.rules import CorrelationConfig
+from medkit_replay.engine.debounce import DebounceConfig, sanitize
+from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
+from medkit_replay.engine.thresholds import EntityOverride, EntityThresholdResolver
+from medkit_replay.engine.validation import fault_code_error, report_error
+from medkit_replay.model import (
+    NS_PER_SEC,
+    Cause,
+    ClearRecord,
+    ClearRequest,
+    EngineOutput,
+    EventKind,
+    FaultEvent,
+    FaultSnapshot,
+    ReportRecord,
+    ReportRequest,
+    RetroactiveMute,
+    Status,
+    Transition,
+)
+
+_EVENT_NAMES = {0: "FAILED", 1: "PASSED"}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FaultManagerConfig:
+    """Fault manager parameters after upstream's sanitising (fault-manager.md §1.2)."""
+
+    debounce: DebounceConfig = DebounceConfig()
+    auto_confirm_after_ns: int = 0
+    near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND
+    entity_overrides: tuple[EntityOverride, ...] = ()
+    correlation: CorrelationConfig | None = None
+    cleanup_interval_ns: int = 5 * NS_PER_SEC
+
+
+class FaultManager:
+    """Upstream's FaultManagerNode with an in-memory storage, driven by bag time."""
+
+    def __init__(self, config: FaultManagerConfig, output: EngineOutput | None = None) -> None:
+        self.config = config
+        self.output = output if output is not None else EngineOutput()
+        self.storage = FaultStorage(config.near_miss_bound)
+        self.resolver = EntityThresholdResolver(sanitize(config.debounce), config.entity_overrides)
+        self.correlation = (
+            CorrelationEngine(config.correlation)
+            if config.correlation is not None and config.correlation.enabled
+            else None
+        )
+
+    # -- ReportFault -----------------------------------------------------------------------
+
+    def report(self, request: ReportRequest) -> bool:
+        """Handle one ReportFault request; returns the response's ``accepted``."""
+        reason = report_error(
+            request.fault_code, request.event_type, request.severity, request.source_id
+        )
+        self.output.reports.append(
+            ReportRecord(
+                t_ns=request.t_ns,
+                origin=request.origin,
+                topic=request.topic,
+                fault_code=request.fault_code,
+                event_type=_EVENT_NAMES.get(request.event_type, str(request.event_type)),
+                severity=request.severity,
+                description=request.description,
+                source_id=request.source_id,
+                accepted=reason is None,
+                reject_reason=reason,
+            )
+        )
+        if reason is not None:
+            return False
+        config = sanitize(self.resolver.resolve(request.source_id))
+        outcome = self.storage.report(
+            request.fault_code,
+            request.event_type,
+            request.severity,
+            request.description,
+            request.source_id,
+            request.t_ns,
+            config,
+        )
+        fault = self.storage.faults.get(request.fault_code)
+        if fault is None:
+            return True  # PASSED for an unknown fault: accepted, nothing stored
+        after = outcome.after
+        if outcome.before != after and after is not None:
+            self._transition(request.t_ns, request.fault_code, outcome.before, after, "report",
+                             request.source_id)
+        muted = False
+        if self.correlation is not None and request.event_type == 0:
+            result = self.correlation.process_fault(
+                request.fault_code, severity_name(request.severity), request.t_ns
+            )
+            muted = result.should_mute
+            if result.retroactive_mute_codes:
+                self.output.retroactive_mutes.append(
+                    RetroactiveMute(
+                        t_ns=request.t_ns,
+                        cluster_id=result.cluster_id,
+                        fault_codes=result.retroactive_mute_codes,
+                    )
+                )
+        kind: EventKind | None = None
+        if after == "CONFIRMED":
+            kind = (
+                "fault_updated"
+                if not outcome.is_new and outcome.before == "CONFIRMED"
+                else "fault_confirmed"
+            )
+        if kind is not None and not muted:
+            self._event(request.t_ns, kind, fault)
+        if not outcome.is_new and outcome.before != "HEALED" and after == "HEALED":
+            self._event(request.t_ns, "fault_cleared", fault)
+        return True
+
+    # -- ClearFault ------------------------------------------------------------------------
+
+    def clear(self, request: ClearRequest) -> bool:
+        """Handle one ClearFault request; returns the response's ``success``."""
+        code = request.fault_code
+        reason = fault_code_error(code)
+        if reason is not None:
+            self._clear_record(request, success=False, message=reason, auto=())
+            return False
+        auto: list[str] = []
+        if self.correlation is not None and not request.skip_correlation_auto_clear:
+            auto = self.correlation.process_clear(code)
+        before = self._status(code)
+        if not self.storage.clear(code):
+            self._clear_record(request, success=False, message=f"Fault not found: {code}", auto=())
+            return False
+        if before != "CLEARED":
+            self._transition(request.t_ns, code, before, "CLEARED", "clear", None)
+        for symptom in auto:
+            symptom_before = self._status(symptom)
+            if self.storage.clear(symptom) and symptom_before != "CLEARED":
+                self._transition(request.t_ns, symptom, symptom_before, "CLEARED", "auto_clear",
+                                 None)
+        message = f"Fault cleared: {code}"
+        if auto:
+            message += f" (auto-cleared {len(auto)} symptoms)"
+        self._clear_record(request, success=True, message=message, auto=tuple(auto))
+        self._event(request.t_ns, "fault_cleared", self.storage.faults[code], tuple(auto))
+        return True
+
+    # -- timers ----------------------------------------------------------------------------
+
+    def auto_confirm_tick(self, now_ns: int) -> list[str]:
+        """One tick of the 1 Hz time-based confirmation: silent PREFAILED → CONFIRMED (§1.7)."""
+        if self.config.auto_confirm_after_ns <= 0:
+            return []
+        due = self.storage.due_for_auto_confirm(now_ns, self.config.auto_confirm_after_ns)
+        for code in due:
+            self.confirm_by_timer(code, now_ns)
+        return due
+
+    def confirm_by_timer(self, code: str, now_ns: int) -> None:
+        """Confirm one PREFAILED fault from the timer: no FaultEvent, as upstream (§1.7)."""
+        self.storage.faults[code].status = "CONFIRMED"
+        self._transition(now_ns, code, "PREFAILED", "CONFIRMED", "auto_confirm", None)
+
+    def cleanup_tick(self, now_ns: int) -> None:
+        """The correlation cleanup timer."""
+        if self.correlation is not None:
+            self.correlation.cleanup_expired(now_ns)
+
+    # -- views -----------------------------------------------------------------------------
+
+    def snapshot(self, fault: FaultRecord) -> FaultSnapshot:
+        """The public state of one fault, with its correlation view."""
+        entry = self.correlation.muted_entry(fault.fault_code) if self.correlation else None
+        clusters = self.correlation.cluster_ids_of(fault.fault_code) if self.correlation else ()
+        return FaultSnapshot(
+            fault_code=fault.fault_code,
+            severity=fault.severity,
+            description=fault.description,
+            first_occurred_ns=fault.first_occurred_ns,
+            last_occurred_ns=fault.last_occurred_ns,
+            last_passed_ns=fault.last_passed_ns,
+            occurrence_count=fault.occurrence_count,
+            status=fault.status,
+            reporting_sources=fault.sorted_sources(),
+            muted=entry is not None,
+            root_cause_code=entry.root_cause_code if entry is not None else None,
+            cluster_ids=clusters,
+        )
+
+    def faults(self) -> list[FaultSnapshot]:
+        """Every known fault in fault_code byte order."""
+        codes = sorted(self.storage.faults, key=lambda c: c.encode("utf-8"))
+        return [self.snapshot(self.storage.faults[c]) for c in codes]
+
+    def _status(self, code: str) -> Status | None:
+        fault = self.storage.faults.get(code)
+        return fault.status if fault is not None else None
+
+    def _transition(
+        self,
+        t_ns: int,
+        code: str,
+        before: Status | None,
+        after: Status,
+        cause: Cause,
+        source_id: str | None,
+    ) -> None:
+        self.output.transitions.append(
+            Transition(
+                t_ns=t_ns,
+                fault_code=code,
+                from_status=before,
+                to_status=after,
+                cause=cause,
+                source_id=source_id,
+            )
+        )
+
+    def _event(
+        self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
+    ) -> None:
+        self.output.events.append(
+            FaultEvent(t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto)
+        )
+
+    def _clear_record(
+        self, request: ClearRequest, *, success: bool, message: str, auto: tuple[str, ...]
+    ) -> None:
+        self.output.clears.append(
+            ClearRecord(
+                t_ns=request.t_ns,
+                fault_code=request.fault_code,
+                skip_correlation_auto_clear=request.skip_correlation_auto_clear,
+                success=success,
+                message=message,
+                auto_cleared_codes=auto,
+            )
+        )

@@ -1,0 +1,175 @@
+"""Fault records and the in-memory storage semantics of ros2_medkit's fault manager.
+
+Pure state machine (fault-manager.md §1.4-§1.8, §1.13): no validation, events or clock.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from medkit_replay.engine.debounce import DebounceConfig, clamp, compute_status
+from medkit_replay.model import NearMiss, Status
+
+CRITICAL = 3
+FAILED = 0
+UINT32_MAX = 2**32 - 1
+DEFAULT_NEAR_MISS_BOUND = 200
+
+
+@dataclass(slots=True)
+class FaultRecord:
+    """Mutable per-code state, aggregated across all reporters."""
+
+    fault_code: str
+    severity: int
+    description: str
+    first_occurred_ns: int
+    last_occurred_ns: int
+    last_failed_ns: int
+    status: Status
+    counter: int = -1
+    occurrence_count: int = 1
+    last_passed_ns: int = 0
+    sources: set[str] = field(default_factory=set)
+
+    def sorted_sources(self) -> tuple[str, ...]:
+        """Reporting sources in byte order, as upstream returns them."""
+        return tuple(sorted(self.sources, key=lambda s: s.encode("utf-8")))
+
+
+@dataclass(frozen=True, slots=True)
+class ReportOutcome:
+    """What one applied report did: status before/after and whether it was a new occurrence."""
+
+    before: Status | None
+    after: Status | None
+    is_new: bool
+
+
+class FaultStorage:
+    """Upstream's InMemoryFaultStorage: one record per fault code, never evicted."""
+
+    def __init__(self, near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND) -> None:
+        self.faults: dict[str, FaultRecord] = {}
+        self.near_misses: dict[str, list[NearMiss]] = {}
+        self.near_miss_bound = near_miss_bound
+
+    def report(
+        self,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+        source_id: str,
+        t_ns: int,
+        config: DebounceConfig,
+    ) -> ReportOutcome:
+        """Apply one accepted report (fault-manager.md §1.20)."""
+        fault = self.faults.get(fault_code)
+        failed = event_type == FAILED
+        crit_hit = config.critical_immediate_confirm and severity == CRITICAL
+        if fault is None:
+            if not failed:
+                return ReportOutcome(None, None, is_new=False)
+            status = "CONFIRMED" if crit_hit else compute_status(-1, None, config)
+            assert status is not None  # counter -1 always yields a status
+            fault = FaultRecord(
+                fault_code=fault_code,
+                severity=severity,
+                description=description,
+                first_occurred_ns=t_ns,
+                last_occurred_ns=t_ns,
+                last_failed_ns=t_ns,
+                status=status,
+                sources={source_id},
+            )
+            self.faults[fault_code] = fault
+            self._near_miss(fault, config, severity, source_id, t_ns)
+            return ReportOutcome(None, status, is_new=True)
+
+        before = fault.status
+        if before == "CLEARED":
+            if not failed:
+                return ReportOutcome(before, before, is_new=False)
+            fault.counter = -1
+            fault.first_occurred_ns = fault.last_occurred_ns = fault.last_failed_ns = t_ns
+            fault.sources.add(source_id)
+            fault.occurrence_count = min(fault.occurrence_count + 1, UINT32_MAX)
+            fault.severity = max(fault.severity, severity)
+            if description:
+                fault.description = description
+            status = "CONFIRMED" if crit_hit else compute_status(-1, "CLEARED", config)
+            assert status is not None
+            fault.status = status
+            self._near_miss(fault, config, severity, source_id, t_ns)
+            return ReportOutcome(before, status, is_new=True)
+
+        fault.counter = clamp(fault.counter, config)
+        if failed:
+            fault.last_occurred_ns = fault.last_failed_ns = t_ns
+            fault.counter = clamp(fault.counter - 1, config)
+            fault.sources.add(source_id)
+            fault.severity = max(fault.severity, severity)
+            if description:
+                fault.description = description
+            new_status = "CONFIRMED" if crit_hit else compute_status(fault.counter, before, config)
+        else:
+            fault.last_passed_ns = t_ns
+            fault.counter = clamp(fault.counter + 1, config)
+            new_status = compute_status(fault.counter, before, config)
+        assert new_status is not None  # an existing fault always has a status to keep
+        fault.status = new_status
+        if failed:
+            self._near_miss(fault, config, severity, source_id, t_ns)
+        return ReportOutcome(before, new_status, is_new=False)
+
+    def clear(self, fault_code: str) -> bool:
+        """Mark a fault CLEARED; False when the code was never reported."""
+        fault = self.faults.get(fault_code)
+        if fault is None:
+            return False
+        fault.status = "CLEARED"
+        return True
+
+    def due_for_auto_confirm(self, now_ns: int, after_ns: int) -> list[str]:
+        """Codes of PREFAILED faults whose last FAILED is at least ``after_ns`` old, byte order."""
+        due = [
+            code
+            for code, fault in self.faults.items()
+            if fault.status == "PREFAILED" and now_ns - fault.last_failed_ns >= after_ns
+        ]
+        due.sort(key=lambda c: c.encode("utf-8"))
+        return due
+
+    def set_near_miss_bound(self, bound: int) -> int:
+        """Apply a new per-code bound (0 = unlimited); returns how many entries were dropped."""
+        self.near_miss_bound = bound
+        if bound <= 0:
+            return 0
+        dropped = 0
+        for series in self.near_misses.values():
+            excess = len(series) - bound
+            if excess > 0:
+                del series[:excess]
+                dropped += excess
+        return dropped
+
+    def _near_miss(
+        self, fault: FaultRecord, config: DebounceConfig, severity: int, source_id: str, t_ns: int
+    ) -> None:
+        if fault.status == "CONFIRMED":
+            return
+        series = self.near_misses.setdefault(fault.fault_code, [])
+        series.append(
+            NearMiss(
+                fault_code=fault.fault_code,
+                t_ns=t_ns,
+                debounce_counter=fault.counter,
+                confirmation_threshold=config.confirmation_threshold,
+                severity=severity,
+                source_id=source_id,
+                resulting_status=fault.status,
+            )
+        )
+        if self.near_miss_bound > 0 and len(series) > self.near_miss_bound:
+            del series[0]

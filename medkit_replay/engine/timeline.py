@@ -1,0 +1,85 @@
+"""Runs the fault manager's timers on bag time between messages (SEMANTICS.md §1).
+
+Pure: ticks lie at t0 + k·period, t0 being the first message's time; due ticks run before a message.
+"""
+
+from __future__ import annotations
+
+from medkit_replay.engine.manager import FaultManager
+from medkit_replay.model import NS_PER_SEC, ClearRequest, ReportRequest
+
+AUTO_CONFIRM_PERIOD_NS = NS_PER_SEC
+
+
+def _first_tick_at_or_after(t_ns: int, t0_ns: int, period_ns: int) -> int:
+    steps = -((t0_ns - t_ns) // period_ns)  # ceil((t - t0) / period)
+    return t0_ns + max(steps, 0) * period_ns
+
+
+class Timeline:
+    """Feeds a FaultManager messages in bag-time order and runs its timers in between.
+
+    Call :meth:`advance` with the time of every message read (whether or not it yields
+    requests), then hand its requests to :meth:`apply`.
+    """
+
+    def __init__(self, manager: FaultManager) -> None:
+        self.manager = manager
+        self.t0_ns: int | None = None
+        self.last_ns: int | None = None
+        self._next_confirm_ns = 0
+        self._next_cleanup_ns = 0
+        self._cleanup_period_ns = manager.config.cleanup_interval_ns
+
+    def advance(self, t_ns: int) -> None:
+        """Run every timer tick due at or before ``t_ns``; ties run before the message."""
+        if self.t0_ns is None:
+            self.t0_ns = self.last_ns = t_ns
+            self._next_confirm_ns = t_ns + AUTO_CONFIRM_PERIOD_NS
+            self._next_cleanup_ns = t_ns + self._cleanup_period_ns
+            return
+        self.last_ns = t_ns
+        if self.manager.config.auto_confirm_after_ns > 0 and self._next_confirm_ns <= t_ns:
+            self._catch_up_auto_confirm(t_ns)
+        if self.manager.correlation is not None and self._next_cleanup_ns <= t_ns:
+            # Cleanup is monotonic in time: the last due tick subsumes the earlier ones.
+            last = self._last_tick_at_or_before(t_ns, self._cleanup_period_ns)
+            self.manager.cleanup_tick(last)
+            self._next_cleanup_ns = last + self._cleanup_period_ns
+
+    def apply(self, request: ReportRequest | ClearRequest) -> None:
+        """Hand one request to the manager (after :meth:`advance` for its message)."""
+        if isinstance(request, ReportRequest):
+            self.manager.report(request)
+        else:
+            self.manager.clear(request)
+
+    def _last_tick_at_or_before(self, t_ns: int, period_ns: int) -> int:
+        assert self.t0_ns is not None
+        return self.t0_ns + ((t_ns - self.t0_ns) // period_ns) * period_ns
+
+    def _catch_up_auto_confirm(self, t_ns: int) -> None:
+        """Apply every 1 s tick in [next, t_ns] at once.
+
+        Between two messages only these ticks change state, and a tick only confirms
+        PREFAILED faults, so each fault's confirming tick is the first one at or after
+        ``last_failed + T``; transitions come out in tick order, then fault_code byte order.
+        """
+        assert self.t0_ns is not None
+        last_tick = self._last_tick_at_or_before(t_ns, AUTO_CONFIRM_PERIOD_NS)
+        after_ns = self.manager.config.auto_confirm_after_ns
+        due: list[tuple[int, bytes, str]] = []
+        for code, fault in self.manager.storage.faults.items():
+            if fault.status != "PREFAILED":
+                continue
+            tick = _first_tick_at_or_after(
+                max(fault.last_failed_ns + after_ns, self._next_confirm_ns),
+                self.t0_ns,
+                AUTO_CONFIRM_PERIOD_NS,
+            )
+            if tick <= last_tick:
+                due.append((tick, code.encode("utf-8"), code))
+        due.sort()
+        for tick, _, code in due:
+            self.manager.confirm_by_timer(code, tick)
+        self._next_confirm_ns = last_tick + AUTO_CONFIRM_PERIOD_NS

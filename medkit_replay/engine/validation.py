@@ -1,0 +1,40 @@
+"""Request validation with the reason texts upstream's fault manager logs.
+
+Pure: checks strings and integers, returns the first failure's text or None.
+"""
+
+from __future__ import annotations
+
+MAX_FAULT_CODE_LENGTH = 128
+_ALLOWED_PUNCTUATION = frozenset("_-.")
+
+
+def fault_code_error(fault_code: str) -> str | None:
+    """Why ``fault_code`` is invalid (fault-manager.md §1.3, checked in upstream's order), or None."""
+    if not fault_code:
+        return "fault_code cannot be empty"
+    if len(fault_code.encode("utf-8")) > MAX_FAULT_CODE_LENGTH:
+        return f"fault_code exceeds maximum length of {MAX_FAULT_CODE_LENGTH}"
+    for char in fault_code:
+        if not ((char.isascii() and char.isalnum()) or char in _ALLOWED_PUNCTUATION):
+            return (
+                f"fault_code contains invalid character '{char}'. "
+                "Only alphanumeric, underscore, hyphen, and dot are allowed"
+            )
+    if ".." in fault_code:
+        return "fault_code cannot contain '..'"
+    return None
+
+
+def report_error(fault_code: str, event_type: int, severity: int, source_id: str) -> str | None:
+    """Why a ReportFault request is rejected, or None when it is accepted."""
+    reason = fault_code_error(fault_code)
+    if reason is not None:
+        return reason
+    if event_type not in (0, 1):
+        return f"invalid event_type {event_type}"
+    if event_type == 0 and severity > 3:
+        return f"invalid severity {severity} for FAILED event"
+    if not source_id:
+        return "source_id cannot be empty"
+    return None

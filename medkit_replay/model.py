@@ -1,0 +1,216 @@
+"""Values that cross layers: requests into the engine, records out of it.
+
+Neutral ground: every layer may import this module; it imports nothing of ours.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import Literal
+
+Origin = Literal["report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"]
+Cause = Literal["report", "auto_confirm", "clear", "auto_clear"]
+EventKind = Literal["fault_confirmed", "fault_updated", "fault_cleared"]
+Status = Literal["PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED"]
+
+NS_PER_SEC = 1_000_000_000
+NS_PER_MS = 1_000_000
+
+
+class Severity(IntEnum):
+    """Fault severities with ros2_medkit_msgs/Fault's numbers."""
+
+    INFO = 0
+    WARN = 1
+    ERROR = 2
+    CRITICAL = 3
+
+
+class EventType(IntEnum):
+    """ReportFault request event types with the service's numbers."""
+
+    FAILED = 0
+    PASSED = 1
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReportRequest:
+    """A ReportFault request as the fault manager receives it, stamped with bag time.
+
+    ``event_type`` and ``severity`` are raw uint8 values: out-of-range ones are
+    rejected by the manager's validation, as upstream does.
+    """
+
+    t_ns: int
+    fault_code: str
+    event_type: int
+    severity: int = 0
+    description: str = ""
+    source_id: str
+    origin: Origin = "script"
+    topic: str | None = None
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ClearRequest:
+    """A ClearFault request stamped with bag time."""
+
+    t_ns: int
+    fault_code: str
+    skip_correlation_auto_clear: bool = False
+    origin: Origin = "script"
+    topic: str | None = None
+
+
+Request = ReportRequest | ClearRequest
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FaultSnapshot:
+    """One fault's public state at an instant (ros2_medkit_msgs/Fault plus correlation)."""
+
+    fault_code: str
+    severity: int
+    description: str
+    first_occurred_ns: int
+    last_occurred_ns: int
+    last_passed_ns: int
+    occurrence_count: int
+    status: Status
+    reporting_sources: tuple[str, ...]
+    muted: bool
+    root_cause_code: str | None
+    cluster_ids: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FaultEvent:
+    """A FaultEvent the live manager would have published."""
+
+    t_ns: int
+    event_type: EventKind
+    fault: FaultSnapshot
+    auto_cleared_codes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Transition:
+    """One status change of one fault."""
+
+    t_ns: int
+    fault_code: str
+    from_status: Status | None
+    to_status: Status
+    cause: Cause
+    source_id: str | None
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReportRecord:
+    """A ReportFault request that reached the manager, with its verdict."""
+
+    t_ns: int
+    origin: Origin
+    topic: str | None
+    fault_code: str
+    event_type: str
+    severity: int
+    description: str
+    source_id: str
+    accepted: bool
+    reject_reason: str | None
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ClearRecord:
+    """A ClearFault request with the response the manager would have sent."""
+
+    t_ns: int
+    fault_code: str
+    skip_correlation_auto_clear: bool
+    success: bool
+    message: str
+    auto_cleared_codes: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MutedFault:
+    """ros2_medkit_msgs/MutedFaultInfo."""
+
+    fault_code: str
+    root_cause_code: str
+    rule_id: str
+    delay_ms: int
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Cluster:
+    """ros2_medkit_msgs/ClusterInfo with bag times."""
+
+    cluster_id: str
+    rule_id: str
+    rule_name: str
+    label: str
+    representative_code: str
+    representative_severity: str
+    fault_codes: tuple[str, ...]
+    count: int
+    first_at_ns: int
+    last_at_ns: int
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class NearMiss:
+    """A FAILED report after which the fault was not CONFIRMED."""
+
+    fault_code: str
+    t_ns: int
+    debounce_counter: int
+    confirmation_threshold: int
+    severity: int
+    source_id: str
+    resulting_status: Status
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RetroactiveMute:
+    """Codes upstream computes as 'retroactively muted' at cluster activation (log only)."""
+
+    t_ns: int
+    cluster_id: str
+    fault_codes: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class TopicSummary:
+    """One topic of one input."""
+
+    topic: str
+    type: str
+    role: str | None
+    messages: int
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class InputSummary:
+    """What one input file held."""
+
+    path: str
+    storage: str
+    start_ns: int | None
+    end_ns: int | None
+    message_count: int
+    topics: tuple[TopicSummary, ...] = ()
+
+
+@dataclass(slots=True, kw_only=True)
+class EngineOutput:
+    """Everything the engine produced during one replay, in production order."""
+
+    events: list[FaultEvent] = field(default_factory=list)
+    transitions: list[Transition] = field(default_factory=list)
+    reports: list[ReportRecord] = field(default_factory=list)
+    clears: list[ClearRecord] = field(default_factory=list)
+    retroactive_mutes: list[RetroactiveMute] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
