@@ -1,0 +1,41 @@
+"""Errors medkit-replay raises; each knows the exit status the CLI turns it into.
+
+The library raises these; only the CLI prints them.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+
+class MedkitReplayError(Exception):
+    """Base of every error the CLI reports as one line."""
+
+    exit_code: ClassVar[int] = 2
+
+    def __init__(self, problem: str, *, path: str | None = None, line: int | None = None) -> None:
+        self.problem = problem
+        self.path = path
+        self.line = line
+        super().__init__(self.render())
+
+    def render(self) -> str:
+        """``path:line: problem`` with whatever location is known."""
+        where = ""
+        if self.path is not None:
+            where = f"{self.path}:{self.line}: " if self.line is not None else f"{self.path}: "
+        return f"{where}{self.problem}"
+
+
+class InputError(MedkitReplayError):
+    """An input recording or script cannot be used (exit 2)."""
+
+
+class ConfigError(MedkitReplayError):
+    """A config file is missing, unparsable or holds a value upstream would refuse (exit 2)."""
+
+
+class CheckFailed(MedkitReplayError):
+    """A check (budget, diff) did not hold (exit 1)."""
+
+    exit_code: ClassVar[int] = 1
