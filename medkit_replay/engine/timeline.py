@@ -42,7 +42,7 @@ class Timeline:
         if self.manager.config.auto_confirm_after_ns > 0 and self._next_confirm_ns <= t_ns:
             self._catch_up_auto_confirm(t_ns)
         if self.manager.correlation is not None and self._next_cleanup_ns <= t_ns:
-            # Cleanup is monotonic in time: the last due tick subsumes the earlier ones.
+            # Cleanup prunes more the later it runs: the last due tick subsumes earlier ones.
             last = self._last_tick_at_or_before(t_ns, self._cleanup_period_ns)
             self.manager.cleanup_tick(last)
             self._next_cleanup_ns = last + self._cleanup_period_ns

@@ -1,0 +1,85 @@
+"""The ``medkit-replay`` command line: parses options, calls the pipeline, writes outputs.
+
+Thin: the only place errors become one line of text and an exit status.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.outputs.json_report import dumps
+from medkit_replay.outputs.tables import write_csv
+from medkit_replay.outputs.terminal import echo, render_summary
+from medkit_replay.pipeline import replay
+from medkit_replay.version import __version__
+
+
+@click.group()
+@click.version_option(__version__, prog_name="medkit-replay")
+def cli() -> None:
+    """Replay recorded ROS 2 traffic through ros2_medkit's fault manager logic."""
+
+
+@cli.command()
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--config", "configs", multiple=True, type=click.Path(path_type=Path),
+              help="ROS 2 parameter file (repeatable; later files override earlier ones).")
+@click.option("--json", "json_out", type=str, default=None,
+              help="Write the JSON report here ('-' for standard output).")
+@click.option("--csv", "csv_dir", type=click.Path(path_type=Path), default=None,
+              help="Write every report table as CSV into this directory.")
+@click.option("--quiet", is_flag=True, help="No human summary.")
+def analyze(inputs: tuple[Path, ...], configs: tuple[Path, ...], json_out: str | None,
+            csv_dir: Path | None, quiet: bool) -> None:
+    """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
+
+    \b
+    Examples:
+      medkit-replay analyze mission/ --config robot_params.yaml --json report.json
+      medkit-replay analyze run.jsonl --json - --quiet
+    """
+    result = replay(list(inputs), list(configs))
+    if json_out == "-":
+        echo(dumps(result))
+    elif json_out is not None:
+        try:
+            Path(json_out).write_text(dumps(result), encoding="utf-8")
+        except OSError as err:
+            raise MedkitReplayError(f"cannot write report: {err.strerror}",
+                                    path=json_out) from None
+    if csv_dir is not None:
+        try:
+            write_csv(result, csv_dir)
+        except OSError as err:
+            raise MedkitReplayError(f"cannot write CSV: {err.strerror}",
+                                    path=str(csv_dir)) from None
+    if not quiet:
+        echo(render_summary(result), sys.stderr if json_out == "-" else sys.stdout)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit status."""
+    try:
+        cli.main(args=argv, prog_name="medkit-replay", standalone_mode=False)
+    except MedkitReplayError as err:
+        echo(f"medkit-replay: error: {err.render()}\n", sys.stderr)
+        return err.exit_code
+    except click.exceptions.Abort:
+        echo("medkit-replay: aborted\n", sys.stderr)
+        return 2
+    except click.ClickException as err:
+        echo(f"medkit-replay: error: {err.format_message()}\n", sys.stderr)
+        return 2
+    except Exception as err:  # noqa: BLE001  # a bug must still end in one line, no traceback
+        echo(f"medkit-replay: internal error: {type(err).__name__}: {err} "
+             "(please report this)\n", sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

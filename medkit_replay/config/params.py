@@ -1,0 +1,191 @@
+"""ROS 2 parameter files in, one flat parameter table per node out, each value with file and line.
+
+Reads YAML only; knows nothing of what the parameters mean (see fault_manager.py and the bridges).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from medkit_replay.errors import ConfigError
+
+KNOWN_NODES = ("fault_manager", "diagnostic_bridge", "action_status_bridge", "log_bridge",
+               "medkit_replay")
+ParamValue = bool | int | float | str | list[bool] | list[int] | list[float] | list[str] | None
+
+_BOOL_TRUE = {"true", "True", "TRUE", "yes", "Yes", "YES", "on", "On", "ON", "y", "Y"}
+_BOOL_FALSE = {"false", "False", "FALSE", "no", "No", "NO", "off", "Off", "OFF", "n", "N"}
+_INT = re.compile(r"[-+]?[0-9]+")
+_FLOAT = re.compile(
+    r"[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN)"
+)
+_NULL = {"", "~", "null", "Null", "NULL"}
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    """One parameter value and where it was written."""
+
+    value: ParamValue
+    path: Path
+    line: int
+
+    def error(self, name: str, problem: str) -> ConfigError:
+        """A ConfigError pointing at this parameter's file and line."""
+        return ConfigError(f"{name}: {problem}", path=str(self.path), line=self.line)
+
+
+NodeParams = dict[str, Param]
+
+
+def _scalar(node: yaml.ScalarNode) -> bool | int | float | str | None:
+    """Type a scalar the way ROS 2's parameter-file parser does: quoted text stays a string."""
+    text = node.value
+    if node.style is not None and node.style != "":
+        return text
+    if text in _NULL:
+        return None
+    if text in _BOOL_TRUE:
+        return True
+    if text in _BOOL_FALSE:
+        return False
+    if _INT.fullmatch(text):
+        return int(text)
+    if _FLOAT.fullmatch(text):
+        lowered = text.lower()
+        if lowered.endswith((".inf", ".nan")):
+            return float(lowered.replace(".", ""))
+        return float(text)
+    return text
+
+
+def _value(node: yaml.Node, path: Path, name: str) -> ParamValue:
+    if isinstance(node, yaml.ScalarNode):
+        return _scalar(node)
+    if isinstance(node, yaml.SequenceNode):
+        items: list[bool | int | float | str] = []
+        for item in node.value:
+            if not isinstance(item, yaml.ScalarNode):
+                msg = f"{name}: arrays of maps or arrays are not ROS 2 parameters"
+                raise ConfigError(msg, path=str(path), line=item.start_mark.line + 1)
+            value = _scalar(item)
+            if value is None:
+                raise ConfigError(
+                    f"{name}: null inside an array", path=str(path), line=item.start_mark.line + 1
+                )
+            items.append(value)
+        kinds = {type(v) for v in items}
+        if len(kinds) > 1:
+            msg = f"{name}: array mixes {', '.join(sorted(k.__name__ for k in kinds))} values"
+            raise ConfigError(msg, path=str(path), line=node.start_mark.line + 1)
+        return items  # type: ignore[return-value]  # homogeneous, checked above
+    msg = f"{name}: unexpected YAML node"
+    raise ConfigError(msg, path=str(path), line=node.start_mark.line + 1)
+
+
+def _flatten(node: yaml.Node, path: Path, prefix: str, out: NodeParams) -> None:
+    """Nested maps and dotted names are the same parameter: ``a: {b: 1}`` ≡ ``a.b: 1``."""
+    if isinstance(node, yaml.MappingNode):
+        for key_node, value_node in node.value:
+            key = str(key_node.value)
+            name = f"{prefix}.{key}" if prefix else key
+            _flatten(value_node, path, name, out)
+        return
+    out[prefix] = Param(_value(node, path, prefix), path, node.start_mark.line + 1)
+
+
+def _node_matches(pattern: str, node_name: str) -> bool:
+    """Match a node key (``fault_manager``, ``/ns/fault_manager``, ``/**``, ``/**/x``)."""
+    segments = [s for s in pattern.strip("/").split("/") if s]
+    if not segments:
+        return False
+    last = segments[-1]
+    if last == "**":
+        return True
+    regex = re.escape(last).replace(r"\*", ".*")
+    return re.fullmatch(regex, node_name) is not None
+
+
+def _collect(node: yaml.MappingNode, path: Path, keys: list[str],
+             found: list[tuple[str, yaml.Node]]) -> None:
+    for key_node, value_node in node.value:
+        key = str(key_node.value)
+        if key == "ros__parameters":
+            found.append(("/" + "/".join(k.strip("/") for k in keys), value_node))
+        elif isinstance(value_node, yaml.MappingNode):
+            _collect(value_node, path, [*keys, key], found)
+        else:
+            msg = f"{'/'.join([*keys, key])}: expected a node name holding ros__parameters"
+            raise ConfigError(msg, path=str(path), line=key_node.start_mark.line + 1)
+
+
+def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
+    """Parse one ROS 2 parameter file into (node key, flat parameters) in file order."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError("config file not found", path=str(path)) from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as err:
+        line = err.problem_mark.line + 1 if err.problem_mark is not None else None
+        raise ConfigError(f"invalid YAML: {err.problem}", path=str(path), line=line) from None
+    except yaml.YAMLError as err:
+        raise ConfigError(f"invalid YAML: {err}", path=str(path)) from None
+    if root is None:
+        return []
+    if not isinstance(root, yaml.MappingNode):
+        msg = "expected a ROS 2 parameter file: node names mapping to ros__parameters"
+        raise ConfigError(msg, path=str(path), line=root.start_mark.line + 1)
+    found: list[tuple[str, yaml.Node]] = []
+    _collect(root, path, [], found)
+    result: list[tuple[str, NodeParams]] = []
+    for node_key, params_node in found:
+        params: NodeParams = {}
+        if isinstance(params_node, yaml.MappingNode):
+            _flatten(params_node, path, "", params)
+        elif not (isinstance(params_node, yaml.ScalarNode) and params_node.value in _NULL):
+            msg = f"{node_key}: ros__parameters must be a map"
+            raise ConfigError(msg, path=str(path), line=params_node.start_mark.line + 1)
+        result.append((node_key, params))
+    return result
+
+
+@dataclass(frozen=True, slots=True)
+class ParameterSet:
+    """Merged parameters per recognised node; later files override earlier ones key by key."""
+
+    nodes: Mapping[str, NodeParams]
+    files: tuple[Path, ...]
+    named: frozenset[str] = frozenset()
+
+    def node(self, name: str) -> NodeParams:
+        """Parameters of one node (empty when the config never names it)."""
+        return dict(self.nodes.get(name, {}))
+
+    def mentions(self, name: str) -> bool:
+        """True when some file has a section naming this node itself (not through a wildcard)."""
+        return name in self.named
+
+
+def load_parameters(paths: Iterable[Path]) -> ParameterSet:
+    """Load and merge parameter files in order (cli-and-report.md §2)."""
+    nodes: dict[str, NodeParams] = {}
+    files: list[Path] = []
+    named: set[str] = set()
+    for path in paths:
+        files.append(path)
+        for node_key, params in load_parameter_file(path):
+            for name in KNOWN_NODES:
+                if _node_matches(node_key, name):
+                    nodes.setdefault(name, {}).update(params)
+                    if node_key.rstrip("/").rsplit("/", 1)[-1] == name:
+                        named.add(name)
+    return ParameterSet(nodes, tuple(files), frozenset(named))

@@ -1,0 +1,94 @@
+"""The report's tables as pandas DataFrames, and CSV files of them.
+
+Built from one Result with the JSON report's field names; list fields stay Python lists.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from medkit_replay.outputs.json_report import (
+    clear_dict,
+    cluster_dict,
+    event_dict,
+    fault_dict,
+    muted_dict,
+    near_miss_dict,
+    report_dict,
+    transition_dict,
+)
+from medkit_replay.result import Result
+
+TABLE_COLUMNS: dict[str, list[str]] = {
+    "faults": [
+        "fault_code", "severity", "description", "first_occurred_ns", "last_occurred_ns",
+        "last_passed_ns", "occurrence_count", "status", "reporting_sources", "muted",
+        "root_cause_code", "cluster_ids",
+    ],
+    "events": ["t_ns", "event_type", "fault_code", "status", "severity", "occurrence_count",
+               "reporting_sources", "muted", "auto_cleared_codes"],
+    "transitions": ["t_ns", "fault_code", "from_status", "to_status", "cause", "source_id"],
+    "reports": ["t_ns", "origin", "topic", "fault_code", "event_type", "severity",
+                "description", "source_id", "accepted", "reject_reason"],
+    "clears": ["t_ns", "fault_code", "skip_correlation_auto_clear", "success", "message",
+               "auto_cleared_codes"],
+    "muted_faults": ["fault_code", "root_cause_code", "rule_id", "delay_ms"],
+    "clusters": ["cluster_id", "rule_id", "rule_name", "label", "representative_code",
+                 "representative_severity", "fault_codes", "count", "first_at_ns",
+                 "last_at_ns"],
+    "near_misses": ["fault_code", "t_ns", "debounce_counter", "confirmation_threshold",
+                    "severity", "source_id", "resulting_status"],
+}
+
+
+def _event_row(event: dict[str, object]) -> dict[str, object]:
+    fault = event["fault"]
+    assert isinstance(fault, dict)
+    return {
+        "t_ns": event["t_ns"],
+        "event_type": event["event_type"],
+        "fault_code": fault["fault_code"],
+        "status": fault["status"],
+        "severity": fault["severity"],
+        "occurrence_count": fault["occurrence_count"],
+        "reporting_sources": fault["reporting_sources"],
+        "muted": fault["muted"],
+        "auto_cleared_codes": event["auto_cleared_codes"],
+    }
+
+
+def result_tables(result: Result) -> dict[str, pd.DataFrame]:
+    """One DataFrame per report table, with stable columns even when empty."""
+    rows: dict[str, list[dict[str, object]]] = {
+        "faults": [fault_dict(f) for f in result.faults],
+        "events": [_event_row(event_dict(e)) for e in result.events],
+        "transitions": [transition_dict(t) for t in result.transitions],
+        "reports": [report_dict(r) for r in result.reports],
+        "clears": [clear_dict(c) for c in result.clears],
+        "muted_faults": [muted_dict(m) for m in result.muted_faults],
+        "clusters": [cluster_dict(c) for c in result.clusters],
+        "near_misses": [near_miss_dict(n) for n in result.near_misses],
+    }
+    return {
+        name: pd.DataFrame(rows[name], columns=pd.Index(columns))
+        for name, columns in TABLE_COLUMNS.items()
+    }
+
+
+def write_csv(result: Result, directory: Path) -> list[Path]:
+    """Write ``<table>.csv`` for every table into ``directory``; lists joined with ``;``."""
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, frame in result_tables(result).items():
+        flat = frame.copy()
+        for column in flat.columns:
+            if flat[column].map(lambda v: isinstance(v, list)).any():
+                flat[column] = flat[column].map(
+                    lambda v: ";".join(map(str, v)) if isinstance(v, list) else v
+                )
+        path = directory / f"{name}.csv"
+        flat.to_csv(path, index=False, lineterminator="\n")
+        written.append(path)
+    return written

@@ -1,0 +1,83 @@
+"""The one result of a replay that every output reads: faults, events, transitions and more.
+
+Plain frozen values; tables as pandas DataFrames are built on request by outputs.tables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from medkit_replay.model import (
+    ClearRecord,
+    Cluster,
+    FaultEvent,
+    FaultSnapshot,
+    InputSummary,
+    MutedFault,
+    NearMiss,
+    ReportRecord,
+    RetroactiveMute,
+    Transition,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+STATUSES = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
+EVENT_KINDS = ("fault_confirmed", "fault_updated", "fault_cleared")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Summary:
+    """Counts over the whole replay."""
+
+    messages_read: int
+    reports: int
+    reports_accepted: int
+    reports_rejected: int
+    clears: int
+    events: dict[str, int]
+    faults: int
+    faults_by_status: dict[str, int]
+    transitions: int
+    start_ns: int | None
+    end_ns: int | None
+
+    @property
+    def duration_ns(self) -> int:
+        """Span of bag time read (0 when nothing was read)."""
+        if self.start_ns is None or self.end_ns is None:
+            return 0
+        return self.end_ns - self.start_ns
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Result:
+    """What the live fault manager would have concluded from the inputs."""
+
+    tool_version: str
+    inputs: tuple[InputSummary, ...]
+    faults: tuple[FaultSnapshot, ...]
+    events: tuple[FaultEvent, ...]
+    transitions: tuple[Transition, ...]
+    reports: tuple[ReportRecord, ...]
+    clears: tuple[ClearRecord, ...]
+    muted_faults: tuple[MutedFault, ...]
+    clusters: tuple[Cluster, ...]
+    near_misses: tuple[NearMiss, ...]
+    retroactive_mutes: tuple[RetroactiveMute, ...] = ()
+    parity: dict[str, object] | None = None
+    warnings: tuple[str, ...] = ()
+    summary: Summary
+    config: dict[str, object] = field(default_factory=dict)
+
+    def fault(self, fault_code: str) -> FaultSnapshot | None:
+        """The final state of one fault, or None when it was never reported."""
+        return next((f for f in self.faults if f.fault_code == fault_code), None)
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        """Every report table as a pandas DataFrame, keyed by the report's key names."""
+        from medkit_replay.outputs.tables import result_tables  # noqa: PLC0415  # pandas is heavy
+
+        return result_tables(self)
