@@ -79,10 +79,14 @@ def main() -> None:
         result = replay([script], [root / "params.yaml"])
         elapsed = time.perf_counter() - start
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"requests: {args.requests}  faults: {len(result.faults)}  "
-          f"events: {len(result.events)}  transitions: {len(result.transitions)}")
-    print(f"replay: {elapsed:.1f} s  ({args.requests / elapsed:,.0f} requests/s), "
-          f"peak RSS {peak_mb:.0f} MB")
+    print(
+        f"requests: {args.requests}  faults: {len(result.faults)}  "
+        f"events: {len(result.events)}  transitions: {len(result.transitions)}"
+    )
+    print(
+        f"replay: {elapsed:.1f} s  ({args.requests / elapsed:,.0f} requests/s), "
+        f"peak RSS {peak_mb:.0f} MB"
+    )
 
 
 if __name__ == "__main__":

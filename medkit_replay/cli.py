@@ -26,15 +26,35 @@ def cli() -> None:
 
 @cli.command()
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--config", "configs", multiple=True, type=click.Path(path_type=Path),
-              help="ROS 2 parameter file (repeatable; later files override earlier ones).")
-@click.option("--json", "json_out", type=str, default=None,
-              help="Write the JSON report here ('-' for standard output).")
-@click.option("--csv", "csv_dir", type=click.Path(path_type=Path), default=None,
-              help="Write every report table as CSV into this directory.")
+@click.option(
+    "--config",
+    "configs",
+    multiple=True,
+    type=click.Path(path_type=Path),
+    help="ROS 2 parameter file (repeatable; later files override earlier ones).",
+)
+@click.option(
+    "--json",
+    "json_out",
+    type=str,
+    default=None,
+    help="Write the JSON report here ('-' for standard output).",
+)
+@click.option(
+    "--csv",
+    "csv_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Write every report table as CSV into this directory.",
+)
 @click.option("--quiet", is_flag=True, help="No human summary.")
-def analyze(inputs: tuple[Path, ...], configs: tuple[Path, ...], json_out: str | None,
-            csv_dir: Path | None, quiet: bool) -> None:
+def analyze(
+    inputs: tuple[Path, ...],
+    configs: tuple[Path, ...],
+    json_out: str | None,
+    csv_dir: Path | None,
+    quiet: bool,
+) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
 
     \b
@@ -49,14 +69,14 @@ def analyze(inputs: tuple[Path, ...], configs: tuple[Path, ...], json_out: str |
         try:
             Path(json_out).write_text(dumps(result), encoding="utf-8")
         except OSError as err:
-            raise MedkitReplayError(f"cannot write report: {err.strerror}",
-                                    path=json_out) from None
+            raise MedkitReplayError(f"cannot write report: {err.strerror}", path=json_out) from None
     if csv_dir is not None:
         try:
             write_csv(result, csv_dir)
         except OSError as err:
-            raise MedkitReplayError(f"cannot write CSV: {err.strerror}",
-                                    path=str(csv_dir)) from None
+            raise MedkitReplayError(
+                f"cannot write CSV: {err.strerror}", path=str(csv_dir)
+            ) from None
     if not quiet:
         echo(render_summary(result), sys.stderr if json_out == "-" else sys.stdout)
 
@@ -74,9 +94,11 @@ def main(argv: list[str] | None = None) -> int:
     except click.ClickException as err:
         echo(f"medkit-replay: error: {err.format_message()}\n", sys.stderr)
         return 2
-    except Exception as err:  # noqa: BLE001  # a bug must still end in one line, no traceback
-        echo(f"medkit-replay: internal error: {type(err).__name__}: {err} "
-             "(please report this)\n", sys.stderr)
+    except Exception as err:  # a bug must still end in one line, no traceback
+        echo(
+            f"medkit-replay: internal error: {type(err).__name__}: {err} (please report this)\n",
+            sys.stderr,
+        )
         return 2
     return 0
 

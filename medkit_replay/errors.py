@@ -35,7 +35,7 @@ class ConfigError(MedkitReplayError):
     """A config file is missing, unparsable or holds a value upstream would refuse (exit 2)."""
 
 
-class CheckFailed(MedkitReplayError):
+class CheckFailed(MedkitReplayError):  # noqa: N818  # reads as a verdict, like click's Abort
     """A check (budget, diff) did not hold (exit 1)."""
 
     exit_code: ClassVar[int] = 1

@@ -9,7 +9,9 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import Literal
 
-Origin = Literal["report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"]
+Origin = Literal[
+    "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
+]
 Cause = Literal["report", "auto_confirm", "clear", "auto_clear"]
 EventKind = Literal["fault_confirmed", "fault_updated", "fault_cleared"]
 Status = Literal["PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED"]

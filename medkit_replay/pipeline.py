@@ -6,9 +6,9 @@ The only place the layers meet (besides the CLI, which calls this).
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
@@ -19,6 +19,9 @@ from medkit_replay.inputs.jsonl import open_script
 from medkit_replay.model import ClearRequest, InputSummary, ReportRequest
 from medkit_replay.result import EVENT_KINDS, STATUSES, Result, Summary
 from medkit_replay.version import __version__
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Iterator, Sequence
 
 Request = ReportRequest | ClearRequest
 
@@ -53,8 +56,13 @@ class _ScriptSource:
             yield _Item(t_ns, self.index, position, (line.request,))
 
     def summary(self) -> InputSummary:
-        return InputSummary(path=str(self.path), storage="jsonl", start_ns=self.start_ns,
-                            end_ns=self.end_ns, message_count=self.count)
+        return InputSummary(
+            path=str(self.path),
+            storage="jsonl",
+            start_ns=self.start_ns,
+            end_ns=self.end_ns,
+            message_count=self.count,
+        )
 
 
 def _open_source(path: Path, index: int) -> _ScriptSource:
@@ -62,8 +70,10 @@ def _open_source(path: Path, index: int) -> _ScriptSource:
         if not path.is_file():
             raise InputError("input not found", path=str(path))
         return _ScriptSource(path, index)
-    raise InputError("unsupported input (expected a .jsonl script, a rosbag2 directory, "
-                     "a .mcap or a .db3 file)", path=str(path))
+    raise InputError(
+        "unsupported input (expected a .jsonl script, a rosbag2 directory, a .mcap or a .db3 file)",
+        path=str(path),
+    )
 
 
 def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> Result:

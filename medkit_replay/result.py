@@ -8,21 +8,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import (
-    ClearRecord,
-    Cluster,
-    FaultEvent,
-    FaultSnapshot,
-    InputSummary,
-    MutedFault,
-    NearMiss,
-    ReportRecord,
-    RetroactiveMute,
-    Transition,
-)
-
 if TYPE_CHECKING:
     import pandas as pd
+
+    from medkit_replay.model import (
+        ClearRecord,
+        Cluster,
+        FaultEvent,
+        FaultSnapshot,
+        InputSummary,
+        MutedFault,
+        NearMiss,
+        ReportRecord,
+        RetroactiveMute,
+        Transition,
+    )
 
 STATUSES = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
 EVENT_KINDS = ("fault_confirmed", "fault_updated", "fault_cleared")

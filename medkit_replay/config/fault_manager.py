@@ -1,20 +1,24 @@
 """The fault_manager node's parameters: upstream's names, defaults, sanitising and warnings.
 
-Turns a node's flat parameters into a FaultManagerConfig; referenced files resolve beside their YAML.
+Turns flat node parameters into a FaultManagerConfig; referenced files resolve beside their YAML.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from medkit_replay.config.correlation_file import load_correlation
 from medkit_replay.config.entity_thresholds_file import load_entity_thresholds
-from medkit_replay.config.params import NodeParams
 from medkit_replay.config.typed import get_bool, get_double, get_int, get_str
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
+from medkit_replay.engine.thresholds import EntityOverride
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
+
+if TYPE_CHECKING:
+    from medkit_replay.config.params import NodeParams
 
 DEFAULT_CLEANUP_INTERVAL_SEC = 5.0
 
@@ -55,13 +59,11 @@ def fault_manager_config(params: NodeParams) -> tuple[FaultManagerConfig, list[s
     if conf == 0:
         warnings.append("fault_manager: confirmation_threshold 0 is invalid; using -1")
 
-    overrides = ()
+    overrides: tuple[EntityOverride, ...] = ()
     entity_file = params.get("entity_thresholds.config_file")
     entity_path = get_str(params, "entity_thresholds.config_file", "")
     if entity_path and entity_file is not None:
-        overrides, entity_warnings = load_entity_thresholds(
-            entity_file.path.parent / entity_path
-        )
+        overrides, entity_warnings = load_entity_thresholds(entity_file.path.parent / entity_path)
         warnings.extend(entity_warnings)
 
     correlation = None

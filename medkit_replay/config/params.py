@@ -6,16 +6,24 @@ Reads YAML only; knows nothing of what the parameters mean (see fault_manager.py
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import yaml
 
 from medkit_replay.errors import ConfigError
 
-KNOWN_NODES = ("fault_manager", "diagnostic_bridge", "action_status_bridge", "log_bridge",
-               "medkit_replay")
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping
+    from pathlib import Path
+
+KNOWN_NODES = (
+    "fault_manager",
+    "diagnostic_bridge",
+    "action_status_bridge",
+    "log_bridge",
+    "medkit_replay",
+)
 ParamValue = bool | int | float | str | list[bool] | list[int] | list[float] | list[str] | None
 
 _BOOL_TRUE = {"true", "True", "TRUE", "yes", "Yes", "YES", "on", "On", "ON", "y", "Y"}
@@ -45,7 +53,7 @@ NodeParams = dict[str, Param]
 
 def _scalar(node: yaml.ScalarNode) -> bool | int | float | str | None:
     """Type a scalar the way ROS 2's parameter-file parser does: quoted text stays a string."""
-    text = node.value
+    text = str(node.value)
     if node.style is not None and node.style != "":
         return text
     if text in _NULL:
@@ -111,8 +119,9 @@ def _node_matches(pattern: str, node_name: str) -> bool:
     return re.fullmatch(regex, node_name) is not None
 
 
-def _collect(node: yaml.MappingNode, path: Path, keys: list[str],
-             found: list[tuple[str, yaml.Node]]) -> None:
+def _collect(
+    node: yaml.MappingNode, path: Path, keys: list[str], found: list[tuple[str, yaml.Node]]
+) -> None:
     for key_node, value_node in node.value:
         key = str(key_node.value)
         if key == "ros__parameters":

@@ -5,7 +5,10 @@ Every failure is a ConfigError pointing at the parameter's file and line.
 
 from __future__ import annotations
 
-from medkit_replay.config.params import NodeParams, Param, ParamValue
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from medkit_replay.config.params import NodeParams, Param, ParamValue
 
 _TYPE_NAMES = {bool: "bool", int: "integer", float: "double", str: "string", list: "array"}
 

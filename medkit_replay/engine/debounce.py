@@ -6,8 +6,10 @@ Pure functions over integers and status strings; no state, no I/O, no clock.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from medkit_replay.model import Status
+if TYPE_CHECKING:
+    from medkit_replay.model import Status
 
 DEFAULT_CONFIRMATION_THRESHOLD = -1
 DEFAULT_HEALING_THRESHOLD = 3

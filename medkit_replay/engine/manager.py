@@ -5,10 +5,10 @@ Pure: consumes timestamped requests and ticks, appends records to an EngineOutpu
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from medkit_replay.engine.correlation.engine import CorrelationEngine, severity_name
-from medkit_replay.engine.correlation.rules import CorrelationConfig
 from medkit_replay.engine.debounce import DebounceConfig, sanitize
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
 from medkit_replay.engine.thresholds import EntityOverride, EntityThresholdResolver
@@ -29,6 +29,9 @@ from medkit_replay.model import (
     Transition,
 )
 
+if TYPE_CHECKING:
+    from medkit_replay.engine.correlation.rules import CorrelationConfig
+
 _EVENT_NAMES = {0: "FAILED", 1: "PASSED"}
 
 
@@ -36,7 +39,7 @@ _EVENT_NAMES = {0: "FAILED", 1: "PASSED"}
 class FaultManagerConfig:
     """Fault manager parameters after upstream's sanitising (fault-manager.md §1.2)."""
 
-    debounce: DebounceConfig = DebounceConfig()
+    debounce: DebounceConfig = field(default_factory=DebounceConfig)
     auto_confirm_after_ns: int = 0
     near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND
     entity_overrides: tuple[EntityOverride, ...] = ()
@@ -96,8 +99,9 @@ class FaultManager:
             return True  # PASSED for an unknown fault: accepted, nothing stored
         after = outcome.after
         if outcome.before != after and after is not None:
-            self._transition(request.t_ns, request.fault_code, outcome.before, after, "report",
-                             request.source_id)
+            self._transition(
+                request.t_ns, request.fault_code, outcome.before, after, "report", request.source_id
+            )
         muted = False
         if self.correlation is not None and request.event_type == 0:
             result = self.correlation.process_fault(
@@ -146,8 +150,9 @@ class FaultManager:
         for symptom in auto:
             symptom_before = self._status(symptom)
             if self.storage.clear(symptom) and symptom_before != "CLEARED":
-                self._transition(request.t_ns, symptom, symptom_before, "CLEARED", "auto_clear",
-                                 None)
+                self._transition(
+                    request.t_ns, symptom, symptom_before, "CLEARED", "auto_clear", None
+                )
         message = f"Fault cleared: {code}"
         if auto:
             message += f" (auto-cleared {len(auto)} symptoms)"
@@ -230,7 +235,9 @@ class FaultManager:
         self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
     ) -> None:
         self.output.events.append(
-            FaultEvent(t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto)
+            FaultEvent(
+                t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto
+            )
         )
 
     def _clear_record(

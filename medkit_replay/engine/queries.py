@@ -5,12 +5,17 @@ Pure filters over FaultRecord or FaultSnapshot values: no storage access, no cor
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from medkit_replay.engine.storage import FaultRecord
 from medkit_replay.model import FaultSnapshot, Status
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 FaultT = TypeVar("FaultT", FaultRecord, FaultSnapshot)
 

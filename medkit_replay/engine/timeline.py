@@ -5,8 +5,12 @@ Pure: ticks lie at t0 + k·period, t0 being the first message's time; due ticks 
 
 from __future__ import annotations
 
-from medkit_replay.engine.manager import FaultManager
+from typing import TYPE_CHECKING
+
 from medkit_replay.model import NS_PER_SEC, ClearRequest, ReportRequest
+
+if TYPE_CHECKING:
+    from medkit_replay.engine.manager import FaultManager
 
 AUTO_CONFIRM_PERIOD_NS = NS_PER_SEC
 

@@ -10,7 +10,7 @@ _ALLOWED_PUNCTUATION = frozenset("_-.")
 
 
 def fault_code_error(fault_code: str) -> str | None:
-    """Why ``fault_code`` is invalid (fault-manager.md §1.3, checked in upstream's order), or None."""
+    """Why ``fault_code`` is invalid (fault-manager.md §1.3, upstream's order), or None."""
     if not fault_code:
         return "fault_code cannot be empty"
     if len(fault_code.encode("utf-8")) > MAX_FAULT_CODE_LENGTH:

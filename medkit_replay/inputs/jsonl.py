@@ -6,13 +6,15 @@ Parses and checks every line; a bad line is an InputError naming the file and li
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.model import ClearRequest, ReportRequest
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+    from pathlib import Path
 
 MAX_LINE_BYTES = 1 << 20
 _EVENT_TYPES = {"FAILED": 0, "PASSED": 1}
@@ -29,29 +31,33 @@ class ScriptLine:
     request: ReportRequest | ClearRequest
 
 
-def _int_field(obj: dict[str, object], key: str, where: tuple[str, int], *,
-               default: int | None = None, maximum: int | None = None) -> int:
+def _int_field(
+    obj: dict[str, object],
+    key: str,
+    where: tuple[str, int],
+    *,
+    default: int | None = None,
+    maximum: int | None = None,
+) -> int:
     value = obj.get(key, default)
     if value is None:
         raise InputError(f"missing {key!r}", path=where[0], line=where[1])
     if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"{key!r} must be an integer, got {value!r}", path=where[0],
-                         line=where[1])
+        raise InputError(f"{key!r} must be an integer, got {value!r}", path=where[0], line=where[1])
     if value < 0 or (maximum is not None and value > maximum):
         bound = f"0..{maximum}" if maximum is not None else ">= 0"
-        raise InputError(f"{key!r} must be in {bound}, got {value}", path=where[0],
-                         line=where[1])
+        raise InputError(f"{key!r} must be in {bound}, got {value}", path=where[0], line=where[1])
     return value
 
 
-def _str_field(obj: dict[str, object], key: str, where: tuple[str, int],
-               default: str | None = None) -> str:
+def _str_field(
+    obj: dict[str, object], key: str, where: tuple[str, int], default: str | None = None
+) -> str:
     value = obj.get(key, default)
     if value is None:
         raise InputError(f"missing {key!r}", path=where[0], line=where[1])
     if not isinstance(value, str):
-        raise InputError(f"{key!r} must be a string, got {value!r}", path=where[0],
-                         line=where[1])
+        raise InputError(f"{key!r} must be a string, got {value!r}", path=where[0], line=where[1])
     return value
 
 
@@ -63,13 +69,17 @@ def parse_line(obj: dict[str, object], where: tuple[str, int]) -> ReportRequest 
     if op == "report":
         unknown = sorted(set(obj) - _REPORT_KEYS)
         if unknown:
-            raise InputError(f"unknown key(s) {unknown} for op 'report'", path=where[0],
-                             line=where[1])
+            raise InputError(
+                f"unknown key(s) {unknown} for op 'report'", path=where[0], line=where[1]
+            )
         raw_event = obj.get("event_type")
         if isinstance(raw_event, str):
             if raw_event not in _EVENT_TYPES:
-                raise InputError(f"'event_type' must be FAILED, PASSED or 0..255, got "
-                                 f"{raw_event!r}", path=where[0], line=where[1])
+                raise InputError(
+                    f"'event_type' must be FAILED, PASSED or 0..255, got {raw_event!r}",
+                    path=where[0],
+                    line=where[1],
+                )
             event_type = _EVENT_TYPES[raw_event]
         else:
             event_type = _int_field(obj, "event_type", where, maximum=_UINT8_MAX)
@@ -85,16 +95,22 @@ def parse_line(obj: dict[str, object], where: tuple[str, int]) -> ReportRequest 
     if op == "clear":
         unknown = sorted(set(obj) - _CLEAR_KEYS)
         if unknown:
-            raise InputError(f"unknown key(s) {unknown} for op 'clear'", path=where[0],
-                             line=where[1])
+            raise InputError(
+                f"unknown key(s) {unknown} for op 'clear'", path=where[0], line=where[1]
+            )
         skip = obj.get("skip_correlation_auto_clear", False)
         if not isinstance(skip, bool):
-            raise InputError(f"'skip_correlation_auto_clear' must be true or false, got "
-                             f"{skip!r}", path=where[0], line=where[1])
-        return ClearRequest(t_ns=t_ns, fault_code=code, skip_correlation_auto_clear=skip,
-                            origin="script")
-    raise InputError(f"unknown op {op!r} (expected 'report' or 'clear')", path=where[0],
-                     line=where[1])
+            raise InputError(
+                f"'skip_correlation_auto_clear' must be true or false, got {skip!r}",
+                path=where[0],
+                line=where[1],
+            )
+        return ClearRequest(
+            t_ns=t_ns, fault_code=code, skip_correlation_auto_clear=skip, origin="script"
+        )
+    raise InputError(
+        f"unknown op {op!r} (expected 'report' or 'clear')", path=where[0], line=where[1]
+    )
 
 
 def iter_script(stream: IO[bytes], path: str) -> Iterator[ScriptLine]:
@@ -112,14 +128,19 @@ def iter_script(stream: IO[bytes], path: str) -> Iterator[ScriptLine]:
         try:
             obj = json.loads(text)
         except json.JSONDecodeError as err:
-            raise InputError(f"invalid JSON: {err.msg} (column {err.colno})", path=path,
-                             line=number) from None
+            raise InputError(
+                f"invalid JSON: {err.msg} (column {err.colno})", path=path, line=number
+            ) from None
         if not isinstance(obj, dict):
             raise InputError("expected a JSON object", path=path, line=number)
         request = parse_line(obj, (path, number))
         if last_t is not None and request.t_ns < last_t:
-            raise InputError(f"t_ns {request.t_ns} is earlier than the previous line's "
-                             f"{last_t}; script times must not decrease", path=path, line=number)
+            raise InputError(
+                f"t_ns {request.t_ns} is earlier than the previous line's "
+                f"{last_t}; script times must not decrease",
+                path=path,
+                line=number,
+            )
         last_t = request.t_ns
         yield ScriptLine(number, request)
 

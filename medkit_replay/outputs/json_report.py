@@ -6,20 +6,21 @@ Schema history: v1 (0.1.0) — first version. Byte-identical for the same Result
 from __future__ import annotations
 
 import json
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
-from medkit_replay.model import (
-    ClearRecord,
-    Cluster,
-    FaultEvent,
-    FaultSnapshot,
-    InputSummary,
-    MutedFault,
-    NearMiss,
-    ReportRecord,
-    Transition,
-)
-from medkit_replay.result import Result
+if TYPE_CHECKING:
+    from medkit_replay.model import (
+        ClearRecord,
+        Cluster,
+        FaultEvent,
+        FaultSnapshot,
+        InputSummary,
+        MutedFault,
+        NearMiss,
+        ReportRecord,
+        Transition,
+    )
+    from medkit_replay.result import Result
 
 SCHEMA = "medkit-replay/report/v1"
 JsonObject = dict[str, object]

@@ -5,7 +5,7 @@ Built from one Result with the JSON report's field names; list fields stay Pytho
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
@@ -19,27 +19,81 @@ from medkit_replay.outputs.json_report import (
     report_dict,
     transition_dict,
 )
-from medkit_replay.result import Result
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from medkit_replay.result import Result
 
 TABLE_COLUMNS: dict[str, list[str]] = {
     "faults": [
-        "fault_code", "severity", "description", "first_occurred_ns", "last_occurred_ns",
-        "last_passed_ns", "occurrence_count", "status", "reporting_sources", "muted",
-        "root_cause_code", "cluster_ids",
+        "fault_code",
+        "severity",
+        "description",
+        "first_occurred_ns",
+        "last_occurred_ns",
+        "last_passed_ns",
+        "occurrence_count",
+        "status",
+        "reporting_sources",
+        "muted",
+        "root_cause_code",
+        "cluster_ids",
     ],
-    "events": ["t_ns", "event_type", "fault_code", "status", "severity", "occurrence_count",
-               "reporting_sources", "muted", "auto_cleared_codes"],
+    "events": [
+        "t_ns",
+        "event_type",
+        "fault_code",
+        "status",
+        "severity",
+        "occurrence_count",
+        "reporting_sources",
+        "muted",
+        "auto_cleared_codes",
+    ],
     "transitions": ["t_ns", "fault_code", "from_status", "to_status", "cause", "source_id"],
-    "reports": ["t_ns", "origin", "topic", "fault_code", "event_type", "severity",
-                "description", "source_id", "accepted", "reject_reason"],
-    "clears": ["t_ns", "fault_code", "skip_correlation_auto_clear", "success", "message",
-               "auto_cleared_codes"],
+    "reports": [
+        "t_ns",
+        "origin",
+        "topic",
+        "fault_code",
+        "event_type",
+        "severity",
+        "description",
+        "source_id",
+        "accepted",
+        "reject_reason",
+    ],
+    "clears": [
+        "t_ns",
+        "fault_code",
+        "skip_correlation_auto_clear",
+        "success",
+        "message",
+        "auto_cleared_codes",
+    ],
     "muted_faults": ["fault_code", "root_cause_code", "rule_id", "delay_ms"],
-    "clusters": ["cluster_id", "rule_id", "rule_name", "label", "representative_code",
-                 "representative_severity", "fault_codes", "count", "first_at_ns",
-                 "last_at_ns"],
-    "near_misses": ["fault_code", "t_ns", "debounce_counter", "confirmation_threshold",
-                    "severity", "source_id", "resulting_status"],
+    "clusters": [
+        "cluster_id",
+        "rule_id",
+        "rule_name",
+        "label",
+        "representative_code",
+        "representative_severity",
+        "fault_codes",
+        "count",
+        "first_at_ns",
+        "last_at_ns",
+    ],
+    "near_misses": [
+        "fault_code",
+        "t_ns",
+        "debounce_counter",
+        "confirmation_threshold",
+        "severity",
+        "source_id",
+        "resulting_status",
+    ],
 }
 
 

@@ -6,9 +6,10 @@ Reads only the Result; the one place that prints.
 from __future__ import annotations
 
 import sys
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
-from medkit_replay.result import Result
+if TYPE_CHECKING:
+    from medkit_replay.result import Result
 
 
 def _seconds(ns: int) -> str:
@@ -25,14 +26,14 @@ def render_summary(result: Result) -> str:
         f"reports: {s.reports} ({s.reports_rejected} rejected), clears: {s.clears}, "
         + "events: "
         + ", ".join(f"{k} {v}" for k, v in s.events.items()),
-        "faults: " + (", ".join(f"{k} {v}" for k, v in s.faults_by_status.items() if v)
-                      or "none"),
+        "faults: " + (", ".join(f"{k} {v}" for k, v in s.faults_by_status.items() if v) or "none"),
     ]
     shown = [f for f in result.faults if f.status in ("CONFIRMED", "HEALED", "CLEARED")]
     if shown:
         lines.append("")
-        lines.append(f"{'code':<32} {'status':<9} {'sev':>3} {'first':>10} {'last':>10} "
-                     f"{'occ':>4}  notes")
+        lines.append(
+            f"{'code':<32} {'status':<9} {'sev':>3} {'first':>10} {'last':>10} {'occ':>4}  notes"
+        )
         for fault in shown:
             notes = []
             if fault.muted:
@@ -46,8 +47,10 @@ def render_summary(result: Result) -> str:
                 + "; ".join(notes)
             )
     for cluster in result.clusters:
-        lines.append(f"cluster {cluster.cluster_id} ({cluster.rule_name}): "
-                     f"{cluster.representative_code} represents {cluster.count} fault(s)")
+        lines.append(
+            f"cluster {cluster.cluster_id} ({cluster.rule_name}): "
+            f"{cluster.representative_code} represents {cluster.count} fault(s)"
+        )
     for warning in result.warnings:
         lines.append(f"WARNING: {warning}")
     return "\n".join(lines) + "\n"

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
 from medkit_replay.errors import ConfigError
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:
@@ -18,12 +21,16 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 
 
 def test_nested_and_dotted_names_are_the_same_parameter(tmp_path: Path) -> None:
-    path = write(tmp_path, "a.yaml", """
+    path = write(
+        tmp_path,
+        "a.yaml",
+        """
 fault_manager:
   ros__parameters:
     correlation: {cleanup_interval_sec: 2.0}
     near_miss.max_per_fault: 7
-""")
+""",
+    )
     params = load_parameters([path]).node("fault_manager")
     assert params["correlation.cleanup_interval_sec"].value == 2.0
     assert params["near_miss.max_per_fault"].value == 7
@@ -31,7 +38,10 @@ fault_manager:
 
 
 def test_namespaced_and_wildcard_keys_apply_and_later_files_override(tmp_path: Path) -> None:
-    first = write(tmp_path, "a.yaml", """
+    first = write(
+        tmp_path,
+        "a.yaml",
+        """
 /**:
   ros__parameters: {healing_enabled: true}
 /robot1/fault_manager:
@@ -39,11 +49,16 @@ def test_namespaced_and_wildcard_keys_apply_and_later_files_override(tmp_path: P
 robot1:
   diagnostic_bridge:
     ros__parameters: {auto_generate_codes: false}
-""")
-    second = write(tmp_path, "b.yaml", """
+""",
+    )
+    second = write(
+        tmp_path,
+        "b.yaml",
+        """
 fault_manager:
   ros__parameters: {healing_threshold: 1}
-""")
+""",
+    )
     params = load_parameters([first, second])
     fm = params.node("fault_manager")
     assert fm["healing_enabled"].value is True
@@ -54,7 +69,10 @@ fault_manager:
 
 
 def test_values_are_typed_as_ros2_types_them(tmp_path: Path) -> None:
-    path = write(tmp_path, "a.yaml", """
+    path = write(
+        tmp_path,
+        "a.yaml",
+        """
 medkit_replay:
   ros__parameters:
     b: yes
@@ -62,20 +80,25 @@ medkit_replay:
     d: 1e3
     s: "5"
     l: [a, b]
-""")
+""",
+    )
     params = load_parameters([path]).node("medkit_replay")
     assert [params[k].value for k in "bidsl"] == [True, -3, 1000.0, "5", ["a", "b"]]
 
 
 def test_upstream_sanitising_with_warnings(tmp_path: Path) -> None:
-    path = write(tmp_path, "a.yaml", """
+    path = write(
+        tmp_path,
+        "a.yaml",
+        """
 fault_manager:
   ros__parameters:
     confirmation_threshold: 3
     healing_threshold: -2
     auto_confirm_after_sec: -1.0
     near_miss: {max_per_fault: -5}
-""")
+""",
+    )
     config, warnings = fault_manager_config(load_parameters([path]).node("fault_manager"))
     assert config.debounce.confirmation_threshold == -3
     assert config.debounce.healing_threshold == 2
@@ -86,8 +109,11 @@ fault_manager:
 
 def test_defaults_without_config() -> None:
     config, warnings = fault_manager_config({})
-    assert (config.debounce.confirmation_threshold, config.debounce.healing_enabled,
-            config.debounce.healing_threshold) == (-1, False, 3)
+    assert (
+        config.debounce.confirmation_threshold,
+        config.debounce.healing_enabled,
+        config.debounce.healing_threshold,
+    ) == (-1, False, 3)
     assert config.auto_confirm_after_ns == 0 and config.correlation is None
     assert warnings == []
 

@@ -16,7 +16,6 @@ CODES = ["MOTOR_OVERHEAT", "MOTOR_COMM_FL", "SENSOR_LIDAR", "SENSOR_IMU", "ESTOP
 SOURCES = ["/powertrain/motor", "/sensors/lidar", "/sensors/lidar/front", "/other", ""]
 
 
-
 @st.composite
 def streams(draw: st.DrawFn) -> list[ReportRequest | ClearRequest]:
     n = draw(st.integers(min_value=1, max_value=80))
@@ -26,8 +25,11 @@ def streams(draw: st.DrawFn) -> list[ReportRequest | ClearRequest]:
         t += draw(st.sampled_from([0, 1, 10, 300, 1000, 2500])) * 1_000_000
         code = draw(st.sampled_from(CODES))
         if draw(st.integers(0, 9)) == 0:
-            out.append(ClearRequest(t_ns=t, fault_code=code,
-                                    skip_correlation_auto_clear=draw(st.booleans())))
+            out.append(
+                ClearRequest(
+                    t_ns=t, fault_code=code, skip_correlation_auto_clear=draw(st.booleans())
+                )
+            )
             continue
         out.append(
             ReportRequest(
@@ -44,11 +46,14 @@ def streams(draw: st.DrawFn) -> list[ReportRequest | ClearRequest]:
 
 @st.composite
 def configs(draw: st.DrawFn) -> FaultManagerConfig:
-    overrides = ()
+    overrides: tuple[EntityOverride, ...] = ()
     if draw(st.booleans()):
         overrides = (
-            EntityOverride(prefix="/sensors", confirmation_threshold=draw(st.integers(-4, -1)),
-                           healing_threshold=draw(st.integers(0, 5))),
+            EntityOverride(
+                prefix="/sensors",
+                confirmation_threshold=draw(st.integers(-4, -1)),
+                healing_threshold=draw(st.integers(0, 5)),
+            ),
             EntityOverride(prefix="/sensors/lidar", healing_enabled=draw(st.booleans())),
         )
     correlation = None
@@ -57,12 +62,23 @@ def configs(draw: st.DrawFn) -> FaultManagerConfig:
             enabled=True,
             patterns={"motor": ("MOTOR_*",), "sensor": ("SENSOR_*",)},
             rules=(
-                CorrelationRule(id="estop", name="estop", root_cause_codes=("ESTOP_001",),
-                                symptom_pattern_ids=("motor",), window_ms=2000,
-                                auto_clear_with_root=draw(st.booleans())),
-                CorrelationRule(id="storm", name="storm", mode="auto_cluster",
-                                match_pattern_ids=("sensor",), min_count=2, window_ms=1500,
-                                representative=draw(st.sampled_from(list(Representative)))),
+                CorrelationRule(
+                    id="estop",
+                    name="estop",
+                    root_cause_codes=("ESTOP_001",),
+                    symptom_pattern_ids=("motor",),
+                    window_ms=2000,
+                    auto_clear_with_root=draw(st.booleans()),
+                ),
+                CorrelationRule(
+                    id="storm",
+                    name="storm",
+                    mode="auto_cluster",
+                    match_pattern_ids=("sensor",),
+                    min_count=2,
+                    window_ms=1500,
+                    representative=draw(st.sampled_from(list(Representative))),
+                ),
             ),
         )
     return FaultManagerConfig(
@@ -138,8 +154,9 @@ def test_each_report_obeys_counter_status_and_event_rules(
             assert cfg.confirmation_threshold <= fault.counter <= cfg.healing_threshold
             start = min(max(counter_before, cfg.confirmation_threshold), cfg.healing_threshold)
             step = -1 if failed else 1
-            assert fault.counter == min(max(start + step, cfg.confirmation_threshold),
-                                        cfg.healing_threshold)
+            assert fault.counter == min(
+                max(start + step, cfg.confirmation_threshold), cfg.healing_threshold
+            )
             if failed and request.severity == 3:
                 assert fault.status == "CONFIRMED"
             else:
@@ -195,8 +212,9 @@ def test_correlation_without_clears_changes_events_only(
     config: FaultManagerConfig, stream: list[ReportRequest | ClearRequest]
 ) -> None:
     reports = [r for r in stream if isinstance(r, ReportRequest)]
-    plain = FaultManager(FaultManagerConfig(debounce=config.debounce,
-                                            entity_overrides=config.entity_overrides))
+    plain = FaultManager(
+        FaultManagerConfig(debounce=config.debounce, entity_overrides=config.entity_overrides)
+    )
     correlated = FaultManager(
         FaultManagerConfig(
             debounce=config.debounce,

@@ -227,11 +227,15 @@ class CorrelationEngine:
                 del self._pending_clusters[pending.data.rule_id]
                 pending = None
             else:
-                data = replace(pending.data, fault_codes=tuple(pending.codes), count=len(pending.codes))
+                data = replace(
+                    pending.data, fault_codes=tuple(pending.codes), count=len(pending.codes)
+                )
                 if data.representative_code == code:
                     new_rep = self._reassign(pending)
                     data = replace(
-                        data, representative_code=new_rep, representative_severity=pending.severities[new_rep]
+                        data,
+                        representative_code=new_rep,
+                        representative_severity=pending.severities[new_rep],
                     )
                 pending.data = data
         active = self._active_clusters.get(cluster_id)
@@ -259,7 +263,9 @@ class CorrelationEngine:
             return pending.codes[-1]
         best = pending.codes[0]
         for candidate in pending.codes[1:]:
-            if severity_rank(pending.severities[candidate]) > severity_rank(pending.severities[best]):
+            if severity_rank(pending.severities[candidate]) > severity_rank(
+                pending.severities[best]
+            ):
                 best = candidate
         return best
 

@@ -50,10 +50,7 @@ def string_to_representative(value: str) -> Representative:
     """Case-insensitive representative name; raises ValueError with upstream's text otherwise."""
     rep = _REPRESENTATIVES.get(value.lower())
     if rep is None:
-        msg = (
-            f"Invalid representative: {value}. "
-            "Valid values: first, most_recent, highest_severity"
-        )
+        msg = f"Invalid representative: {value}. Valid values: first, most_recent, highest_severity"
         raise ValueError(msg)
     return rep
 
@@ -137,7 +134,9 @@ def validate_config(config: CorrelationConfig) -> ValidationResult:
             if rule.min_count == 0:
                 errors.append(f"Rule '{rule.id}' has min_count=0, must be at least 1")
             elif rule.min_count == 1:
-                warnings.append(f"Rule '{rule.id}' has min_count < 2, which may cause false clusters")
+                warnings.append(
+                    f"Rule '{rule.id}' has min_count < 2, which may cause false clusters"
+                )
         if rule.window_ms == 0:
             errors.append(f"Rule '{rule.id}' has window_ms=0")
         elif rule.window_ms > 60000:
