@@ -13,12 +13,12 @@ from medkit_replay.config.entity_thresholds_file import load_entity_thresholds
 from medkit_replay.config.typed import get_bool, get_double, get_int, get_str
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
-from medkit_replay.engine.thresholds import EntityOverride
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams
+    from medkit_replay.engine.thresholds import EntityOverride
 
 DEFAULT_CLEANUP_INTERVAL_SEC = 5.0
 
