@@ -29,6 +29,11 @@ def severity_rank(severity: str) -> int:
     return _RANKS.get(severity, 0)
 
 
+def _expiry_ns(t_ns: int, window_ms: int) -> int:
+    """First instant at which an entry made at ``t_ns`` is outside its window."""
+    return t_ns + (window_ms + 1) * NS_PER_MS
+
+
 def trunc_ms(delta_ns: int) -> int:
     """Whole milliseconds of a duration, truncated toward zero like a chrono duration_cast."""
     return delta_ns // NS_PER_MS if delta_ns >= 0 else -((-delta_ns) // NS_PER_MS)
@@ -45,6 +50,15 @@ class CorrelationResult:
     delay_ms: int = 0
     cluster_id: str = ""
     retroactive_mute_codes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class _CodeRoles:
+    """What the rules make of one code; pattern matching is pure, so it is done once per code."""
+
+    symptom_of: frozenset[str]
+    root_rule: CorrelationRule | None
+    cluster_rule: CorrelationRule | None
 
 
 @dataclass(slots=True)
@@ -77,32 +91,62 @@ class CorrelationEngine:
         self._active_clusters: dict[str, Cluster] = {}
         self._fault_to_cluster: dict[str, str] = {}
         self._cluster_counter = 0
+        # Derived indexes, kept in step with the state above; they change no result.
+        self._clusters_of_code: dict[str, set[str]] = {}
+        self._roles: dict[str, _CodeRoles] = {}
+        self._next_root_expiry_ns: int | None = None
 
     # -- reports ---------------------------------------------------------------------------
 
     def process_fault(self, code: str, severity: str, t_ns: int) -> CorrelationResult:
         """Correlate one accepted FAILED report; precedence symptom, root, cluster (§6)."""
         self._prune_roots(t_ns)
-        symptom = self._match_symptom(code, t_ns)
-        if symptom is not None:
-            return symptom
-        for rule in self.config.rules:
-            if rule.mode == "hierarchical" and matches_any(code, rule.root_cause_codes):
-                self._pending_roots.append(_PendingRoot(code, rule.id, t_ns, rule.window_ms))
-                self._root_to_symptoms[code] = []
-                return CorrelationResult(is_root_cause=True, rule_id=rule.id)
-        for rule in self.config.rules:
-            if rule.mode == "auto_cluster" and any(
-                self._matcher.matches(code, pid) for pid in rule.match_pattern_ids
-            ):
-                return self._cluster(rule, code, severity, t_ns)
+        roles = self._roles_of(code)
+        if roles.symptom_of:
+            symptom = self._match_symptom(code, t_ns, roles.symptom_of)
+            if symptom is not None:
+                return symptom
+        rule = roles.root_rule
+        if rule is not None:
+            self._pending_roots.append(_PendingRoot(code, rule.id, t_ns, rule.window_ms))
+            self._root_to_symptoms[code] = []
+            expiry = _expiry_ns(t_ns, rule.window_ms)
+            if self._next_root_expiry_ns is None or expiry < self._next_root_expiry_ns:
+                self._next_root_expiry_ns = expiry
+            return CorrelationResult(is_root_cause=True, rule_id=rule.id)
+        if roles.cluster_rule is not None:
+            return self._cluster(roles.cluster_rule, code, severity, t_ns)
         return CorrelationResult()
 
-    def _match_symptom(self, code: str, t_ns: int) -> CorrelationResult | None:
+    def _roles_of(self, code: str) -> _CodeRoles:
+        roles = self._roles.get(code)
+        if roles is None:
+            hierarchical = [r for r in self.config.rules if r.mode == "hierarchical"]
+            roles = _CodeRoles(
+                symptom_of=frozenset(r.id for r in hierarchical if self._is_symptom(r, code)),
+                root_rule=next(
+                    (r for r in hierarchical if matches_any(code, r.root_cause_codes)), None
+                ),
+                cluster_rule=next(
+                    (
+                        r
+                        for r in self.config.rules
+                        if r.mode == "auto_cluster"
+                        and any(self._matcher.matches(code, pid) for pid in r.match_pattern_ids)
+                    ),
+                    None,
+                ),
+            )
+            self._roles[code] = roles
+        return roles
+
+    def _match_symptom(
+        self, code: str, t_ns: int, symptom_of: frozenset[str]
+    ) -> CorrelationResult | None:
         for entry in self._pending_roots:
-            rule = self._rules.get(entry.rule_id)
-            if rule is None or rule.mode != "hierarchical" or not self._is_symptom(rule, code):
+            if entry.rule_id not in symptom_of:
                 continue
+            rule = self._rules[entry.rule_id]
             elapsed = trunc_ms(t_ns - entry.t_ns)
             if elapsed > rule.window_ms:
                 continue
@@ -186,7 +230,7 @@ class CorrelationEngine:
         retro: tuple[str, ...] = ()
         if cluster_id not in self._active_clusters and rule.show_as_single:
             retro = tuple(c for c in pending.codes if c not in (rep_code, code))
-        self._active_clusters[cluster_id] = pending.data
+        self._set_active(pending.data)
         return CorrelationResult(
             should_mute=rule.show_as_single and code != rep_code,
             cluster_id=cluster_id,
@@ -243,7 +287,7 @@ class CorrelationEngine:
             return
         codes = tuple(c for c in active.fault_codes if c != code)
         if not codes:
-            del self._active_clusters[cluster_id]
+            self._set_active(None, cluster_id)
             return
         active = replace(active, fault_codes=codes, count=len(codes))
         if active.representative_code == code and pending is not None:
@@ -253,7 +297,22 @@ class CorrelationEngine:
                 representative_severity=pending.data.representative_severity,
             )
         # Without a pending twin the representative keeps naming the cleared code (Q9).
-        self._active_clusters[cluster_id] = active
+        self._set_active(active)
+
+    def _set_active(self, cluster: Cluster | None, cluster_id: str = "") -> None:
+        """Write (or with None, delete) an active cluster and keep the code index in step."""
+        cid = cluster.cluster_id if cluster is not None else cluster_id
+        old = self._active_clusters.pop(cid, None)
+        if old is not None:
+            for member in old.fault_codes:
+                ids = self._clusters_of_code[member]
+                ids.discard(cid)
+                if not ids:
+                    del self._clusters_of_code[member]
+        if cluster is not None:
+            self._active_clusters[cid] = cluster
+            for member in cluster.fault_codes:
+                self._clusters_of_code.setdefault(member, set()).add(cid)
 
     def _reassign(self, pending: _PendingCluster) -> str:
         rule = self._rules[pending.data.rule_id]
@@ -283,12 +342,17 @@ class CorrelationEngine:
                 del self._pending_clusters[rule_id]
 
     def _prune_roots(self, now_ns: int) -> None:
-        if self._pending_roots:
-            self._pending_roots = [
-                entry
-                for entry in self._pending_roots
-                if trunc_ms(now_ns - entry.t_ns) <= entry.window_ms
-            ]
+        # Only rebuild the list once the earliest entry can have expired.
+        if self._next_root_expiry_ns is None or now_ns < self._next_root_expiry_ns:
+            return
+        self._pending_roots = [
+            entry
+            for entry in self._pending_roots
+            if trunc_ms(now_ns - entry.t_ns) <= entry.window_ms
+        ]
+        self._next_root_expiry_ns = min(
+            (_expiry_ns(e.t_ns, e.window_ms) for e in self._pending_roots), default=None
+        )
 
     # -- queries ---------------------------------------------------------------------------
 
@@ -307,7 +371,10 @@ class CorrelationEngine:
 
     def cluster_ids_of(self, code: str) -> tuple[str, ...]:
         """Ids of the active clusters listing ``code``, in byte order."""
-        return tuple(c.cluster_id for c in self.clusters() if code in c.fault_codes)
+        ids = self._clusters_of_code.get(code)
+        if not ids:
+            return ()
+        return tuple(sorted(ids, key=lambda c: c.encode("utf-8")))
 
     @property
     def muted_count(self) -> int:
