@@ -31,10 +31,19 @@ class FaultRecord:
     occurrence_count: int = 1
     last_passed_ns: int = 0
     sources: set[str] = field(default_factory=set)
+    _sorted_sources: tuple[str, ...] | None = None
+
+    def add_source(self, source_id: str) -> None:
+        """Add a FAILED reporter's source_id (the set is never pruned)."""
+        if source_id not in self.sources:
+            self.sources.add(source_id)
+            self._sorted_sources = None
 
     def sorted_sources(self) -> tuple[str, ...]:
         """Reporting sources in byte order, as upstream returns them."""
-        return tuple(sorted(self.sources, key=lambda s: s.encode("utf-8")))
+        if self._sorted_sources is None:
+            self._sorted_sources = tuple(sorted(self.sources, key=lambda s: s.encode("utf-8")))
+        return self._sorted_sources
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,7 +102,7 @@ class FaultStorage:
                 return ReportOutcome(before, before, is_new=False)
             fault.counter = -1
             fault.first_occurred_ns = fault.last_occurred_ns = fault.last_failed_ns = t_ns
-            fault.sources.add(source_id)
+            fault.add_source(source_id)
             fault.occurrence_count = min(fault.occurrence_count + 1, UINT32_MAX)
             fault.severity = max(fault.severity, severity)
             if description:
@@ -108,7 +117,7 @@ class FaultStorage:
         if failed:
             fault.last_occurred_ns = fault.last_failed_ns = t_ns
             fault.counter = clamp(fault.counter - 1, config)
-            fault.sources.add(source_id)
+            fault.add_source(source_id)
             fault.severity = max(fault.severity, severity)
             if description:
                 fault.description = description

@@ -5,12 +5,19 @@ Pure: checks strings and integers, returns the first failure's text or None.
 
 from __future__ import annotations
 
+import re
+from functools import lru_cache
+
 MAX_FAULT_CODE_LENGTH = 128
+_VALID = re.compile(r"[A-Za-z0-9_.\-]{1,128}")
 _ALLOWED_PUNCTUATION = frozenset("_-.")
 
 
+@lru_cache(maxsize=65536)
 def fault_code_error(fault_code: str) -> str | None:
     """Why ``fault_code`` is invalid (fault-manager.md §1.3, upstream's order), or None."""
+    if _VALID.fullmatch(fault_code) is not None:
+        return "fault_code cannot contain '..'" if ".." in fault_code else None
     if not fault_code:
         return "fault_code cannot be empty"
     if len(fault_code.encode("utf-8")) > MAX_FAULT_CODE_LENGTH:
