@@ -32,7 +32,22 @@ class InputError(MedkitReplayError):
 
 
 class ConfigError(MedkitReplayError):
-    """A config file is missing, unparsable or holds a value upstream would refuse (exit 2)."""
+    """A config file is missing, unparsable or holds a value upstream would refuse (exit 2).
+
+    ``parameter`` names the ROS parameter at fault, so that the config layer, which knows
+    where each value was written, can add the file and line.
+    """
+
+    def __init__(
+        self,
+        problem: str,
+        *,
+        path: str | None = None,
+        line: int | None = None,
+        parameter: str | None = None,
+    ) -> None:
+        self.parameter = parameter
+        super().__init__(problem, path=path, line=line)
 
 
 class CheckFailed(MedkitReplayError):  # noqa: N818  # reads as a verdict, like click's Abort

@@ -10,11 +10,12 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.config.correlation_file import load_correlation
 from medkit_replay.config.entity_thresholds_file import load_entity_thresholds
-from medkit_replay.config.typed import get_bool, get_double, get_int, get_str
+from medkit_replay.config.nodes import located, values
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
+from medkit_replay.parameters import ParameterReader
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams
@@ -24,44 +25,48 @@ DEFAULT_CLEANUP_INTERVAL_SEC = 5.0
 
 
 def fault_manager_config(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
-    """Build the manager's config from its parameters, with upstream's warnings (§1.2)."""
-    warnings: list[str] = []
-    conf = get_int(params, "confirmation_threshold", -1)
+    """Build the manager's config from its parameters, with upstream's warnings (§1.2).
+
+    Raises:
+        ConfigError: a parameter of the wrong type, with its file and line.
+    """
+    return located(params, lambda: _build(params))
+
+
+def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
+    reader = ParameterReader("fault_manager", values(params))
+    warnings = reader.warnings
+    conf = reader.integer("confirmation_threshold", -1)
     if conf > 0:
-        warnings.append(
-            f"fault_manager: confirmation_threshold {conf} is positive; using {-conf} "
-            "(upstream negates it)"
+        reader.warn(
+            f"confirmation_threshold {conf} is positive; using {-conf} (upstream negates it)"
         )
         conf = -conf
-    heal = get_int(params, "healing_threshold", 3)
+    heal = reader.integer("healing_threshold", 3)
     if heal < 0:
-        warnings.append(
-            f"fault_manager: healing_threshold {heal} is negative; using {-heal} "
-            "(upstream negates it)"
-        )
+        reader.warn(f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)")
         heal = -heal
-    auto_sec = get_double(params, "auto_confirm_after_sec", 0.0)
+    auto_sec = reader.double("auto_confirm_after_sec", 0.0)
     if auto_sec < 0 or math.isnan(auto_sec):
-        warnings.append(f"fault_manager: auto_confirm_after_sec {auto_sec} is negative; using 0.0")
+        reader.warn(f"auto_confirm_after_sec {auto_sec} is negative; using 0.0")
         auto_sec = 0.0
-    near_miss = get_int(params, "near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)
+    near_miss = reader.integer("near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)
     if near_miss < 0:
-        warnings.append(
-            f"fault_manager: near_miss.max_per_fault {near_miss} is negative; "
-            f"using {DEFAULT_NEAR_MISS_BOUND}"
+        reader.warn(
+            f"near_miss.max_per_fault {near_miss} is negative; using {DEFAULT_NEAR_MISS_BOUND}"
         )
         near_miss = DEFAULT_NEAR_MISS_BOUND
     debounce = DebounceConfig(
         confirmation_threshold=conf,
-        healing_enabled=get_bool(params, "healing_enabled", False),
+        healing_enabled=reader.boolean("healing_enabled", False),
         healing_threshold=heal,
     )
     if conf == 0:
-        warnings.append("fault_manager: confirmation_threshold 0 is invalid; using -1")
+        reader.warn("confirmation_threshold 0 is invalid; using -1")
 
     overrides: tuple[EntityOverride, ...] = ()
     entity_file = params.get("entity_thresholds.config_file")
-    entity_path = get_str(params, "entity_thresholds.config_file", "")
+    entity_path = reader.string("entity_thresholds.config_file", "")
     if entity_path and entity_file is not None:
         overrides, entity_warnings = load_entity_thresholds(entity_file.path.parent / entity_path)
         warnings.extend(entity_warnings)
@@ -69,19 +74,19 @@ def fault_manager_config(params: NodeParams) -> tuple[FaultManagerConfig, list[s
     correlation = None
     cleanup_sec = DEFAULT_CLEANUP_INTERVAL_SEC
     corr_param = params.get("correlation.config_file")
-    corr_path = get_str(params, "correlation.config_file", "")
+    corr_path = reader.string("correlation.config_file", "")
     if corr_path and corr_param is not None:
         loaded = load_correlation(corr_param.path.parent / corr_path)
         warnings.extend(loaded.warnings)
         correlation = loaded.config
         if correlation is not None:
             # Declared only when an engine exists, as upstream does.
-            cleanup_sec = get_double(
-                params, "correlation.cleanup_interval_sec", DEFAULT_CLEANUP_INTERVAL_SEC
+            cleanup_sec = reader.double(
+                "correlation.cleanup_interval_sec", DEFAULT_CLEANUP_INTERVAL_SEC
             )
             if not cleanup_sec > 0:
-                warnings.append(
-                    f"fault_manager: correlation.cleanup_interval_sec {cleanup_sec} must be "
+                reader.warn(
+                    f"correlation.cleanup_interval_sec {cleanup_sec} must be "
                     f"positive; using {DEFAULT_CLEANUP_INTERVAL_SEC}"
                 )
                 cleanup_sec = DEFAULT_CLEANUP_INTERVAL_SEC

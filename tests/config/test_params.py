@@ -121,9 +121,9 @@ def test_defaults_without_config() -> None:
 @pytest.mark.parametrize(
     ("body", "line", "problem"),
     [
-        ("    confirmation_threshold: -1.5\n", 4, "confirmation_threshold: expected an integer"),
+        ("    confirmation_threshold: -1.5\n", 4, "'confirmation_threshold' must be an integer"),
         ("    auto_confirm_after_sec: 10\n", 4, "write 10.0"),
-        ("    healing_enabled: 1\n", 4, "healing_enabled: expected a bool"),
+        ("    healing_enabled: 1\n", 4, "'healing_enabled' must be a bool"),
     ],
 )
 def test_wrong_type_is_refused_as_the_node_would(

@@ -1,0 +1,143 @@
+"""What every bridge shares: the Bridge protocol and the FaultReporter each bridge reports through.
+
+The reporter mirrors ros2_medkit_fault_reporter (bridges.md §0): empty codes dropped, then filtered.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import TYPE_CHECKING, Protocol
+
+from medkit_replay.engine.local_filter import LocalFilter, LocalFilterConfig
+from medkit_replay.model import EventType, ReportRequest
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from medkit_replay.model import Origin
+
+
+class Bridge(Protocol):
+    """A live bridge node replayed offline: decoded messages in, ReportFault requests out."""
+
+    @property
+    def name(self) -> str:
+        """Upstream node name (``diagnostic_bridge``, ``action_status_bridge``, ``log_bridge``)."""
+        ...
+
+    @property
+    def origin(self) -> Origin:
+        """The ``origin`` stamped on every request this bridge emits."""
+        ...
+
+    def wants(self, topic: str, msgtype: str) -> bool:
+        """Whether the live node would subscribe to this topic of this type."""
+        ...
+
+    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
+        """Feed one message (received at bag time ``t_ns``); return what the node would send."""
+        ...
+
+
+class FaultReporter:
+    """One upstream FaultReporter: a fixed source_id and its own LocalFilter.
+
+    The manager's service is taken as always ready (bridges.md §10.2); the action bridge models
+    outages itself before calling in, as upstream gates on ``is_service_ready()``.
+    """
+
+    def __init__(
+        self,
+        source_id: str,
+        filter_config: LocalFilterConfig,
+        *,
+        origin: Origin,
+    ) -> None:
+        self.source_id = source_id
+        self.origin: Origin = origin
+        self.local_filter = LocalFilter(filter_config)
+
+    def report(
+        self, t_ns: int, topic: str, fault_code: str, severity: int, description: str
+    ) -> ReportRequest | None:
+        """A FAILED request, or None when the code is empty or the local filter holds it."""
+        if not fault_code or not self.local_filter.should_forward(fault_code, severity, t_ns):
+            return None
+        return ReportRequest(
+            t_ns=t_ns,
+            fault_code=fault_code,
+            event_type=int(EventType.FAILED),
+            severity=severity,
+            description=description,
+            source_id=self.source_id,
+            origin=self.origin,
+            topic=topic,
+        )
+
+    def report_passed(self, t_ns: int, topic: str, fault_code: str) -> ReportRequest | None:
+        """A PASSED request (severity 0, no description), or None when held back."""
+        if not fault_code or not self.local_filter.should_forward_passed(fault_code, t_ns):
+            return None
+        return ReportRequest(
+            t_ns=t_ns,
+            fault_code=fault_code,
+            event_type=int(EventType.PASSED),
+            severity=0,
+            description="",
+            source_id=self.source_id,
+            origin=self.origin,
+            topic=topic,
+        )
+
+
+class ReporterCache:
+    """Reporters keyed by source_id, least recently used evicted beyond ``capacity``.
+
+    An evicted reporter's filter counts are lost; a later lookup builds a fresh one (§2.4).
+    """
+
+    def __init__(self, capacity: int, filter_config: LocalFilterConfig, *, origin: Origin) -> None:
+        self.capacity = max(capacity, 1)
+        self._filter_config = filter_config
+        self._origin: Origin = origin
+        self._reporters: OrderedDict[str, FaultReporter] = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._reporters)
+
+    def __contains__(self, source_id: object) -> bool:
+        return source_id in self._reporters
+
+    def get(self, source_id: str) -> FaultReporter:
+        """The reporter for ``source_id``, created on first use; a lookup refreshes its recency."""
+        reporter = self._reporters.get(source_id)
+        if reporter is not None:
+            self._reporters.move_to_end(source_id)
+            return reporter
+        reporter = FaultReporter(source_id, self._filter_config, origin=self._origin)
+        self._reporters[source_id] = reporter
+        if len(self._reporters) > self.capacity:
+            self._reporters.popitem(last=False)
+        return reporter
+
+
+def any_substring(patterns: Iterable[str], text: str) -> bool:
+    """True when a non-empty pattern occurs anywhere in ``text`` (empty patterns never match)."""
+    return any(pattern and pattern in text for pattern in patterns)
+
+
+def passes_lists(include_only: tuple[str, ...], exclude: tuple[str, ...], text: str) -> bool:
+    """Upstream's include-only-then-exclude eligibility with unanchored substrings."""
+    if include_only and not any_substring(include_only, text):
+        return False
+    return not any_substring(exclude, text)
+
+
+def resolve_topic(name: str, node_fqn: str) -> str:
+    """Expand a relative (``diagnostics``) or private (``~/x``) topic name as rcl would."""
+    if name.startswith("/"):
+        return name
+    if name == "~" or name.startswith("~/"):
+        return node_fqn + name[1:]
+    namespace = node_fqn.rsplit("/", 1)[0] or "/"
+    return f"{namespace.rstrip('/')}/{name}"
