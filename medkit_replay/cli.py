@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.outputs.json_report import dumps
+from medkit_replay.outputs.json_report import write_json
 from medkit_replay.outputs.tables import write_csv
 from medkit_replay.outputs.terminal import echo, render_summary
 from medkit_replay.pipeline import replay
@@ -64,10 +64,11 @@ def analyze(
     """
     result = replay(list(inputs), list(configs))
     if json_out == "-":
-        echo(dumps(result))
+        write_json(result, sys.stdout)
     elif json_out is not None:
         try:
-            Path(json_out).write_text(dumps(result), encoding="utf-8")
+            with Path(json_out).open("w", encoding="utf-8") as stream:
+                write_json(result, stream)
         except OSError as err:
             raise MedkitReplayError(f"cannot write report: {err.strerror}", path=json_out) from None
     if csv_dir is not None:

@@ -7,7 +7,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Literal
+from typing import TYPE_CHECKING, Literal, Protocol, TypeVar
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
 
 Origin = Literal[
     "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
@@ -206,13 +209,29 @@ class InputSummary:
     topics: tuple[TopicSummary, ...] = ()
 
 
+T = TypeVar("T")
+
+
+class RecordLog(Protocol[T]):
+    """An append-only sequence of records: a list, or a Spool that keeps memory bounded."""
+
+    def append(self, item: T, /) -> None:
+        """Add a record at the end."""
+
+    def __len__(self) -> int: ...
+
+    def __iter__(self) -> Iterator[T]: ...
+
+    def __getitem__(self, index: int, /) -> T: ...
+
+
 @dataclass(slots=True, kw_only=True)
 class EngineOutput:
     """Everything the engine produced during one replay, in production order."""
 
-    events: list[FaultEvent] = field(default_factory=list)
-    transitions: list[Transition] = field(default_factory=list)
-    reports: list[ReportRecord] = field(default_factory=list)
-    clears: list[ClearRecord] = field(default_factory=list)
+    events: RecordLog[FaultEvent] = field(default_factory=list)
+    transitions: RecordLog[Transition] = field(default_factory=list)
+    reports: RecordLog[ReportRecord] = field(default_factory=list)
+    clears: RecordLog[ClearRecord] = field(default_factory=list)
     retroactive_mutes: list[RetroactiveMute] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)

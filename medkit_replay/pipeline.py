@@ -16,8 +16,18 @@ from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.jsonl import open_script
-from medkit_replay.model import ClearRequest, InputSummary, ReportRequest
+from medkit_replay.model import (
+    ClearRecord,
+    ClearRequest,
+    EngineOutput,
+    FaultEvent,
+    InputSummary,
+    ReportRecord,
+    ReportRequest,
+    Transition,
+)
 from medkit_replay.result import EVENT_KINDS, STATUSES, Result, Summary
+from medkit_replay.spool import Spool
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -91,7 +101,12 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
         raise InputError("no input given")
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
-    manager = FaultManager(manager_config)
+    events: Spool[FaultEvent] = Spool()
+    transitions: Spool[Transition] = Spool()
+    reports: Spool[ReportRecord] = Spool()
+    clears: Spool[ClearRecord] = Spool()
+    output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
+    manager = FaultManager(manager_config, output)
     timeline = Timeline(manager)
     sources = [_open_source(Path(p), i) for i, p in enumerate(inputs)]
     merged = heapq.merge(
@@ -103,7 +118,6 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
         timeline.advance(item.t_ns)
         for request in item.requests:
             timeline.apply(request)
-    output = manager.output
     faults = manager.faults()
     correlation = manager.correlation
     near_misses = [
@@ -135,10 +149,10 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
         tool_version=__version__,
         inputs=tuple(s.summary() for s in sources),
         faults=tuple(faults),
-        events=tuple(output.events),
-        transitions=tuple(output.transitions),
-        reports=tuple(output.reports),
-        clears=tuple(output.clears),
+        events=events,
+        transitions=transitions,
+        reports=reports,
+        clears=clears,
         muted_faults=tuple(correlation.muted_faults()) if correlation else (),
         clusters=tuple(correlation.clusters()) if correlation else (),
         near_misses=tuple(near_misses),

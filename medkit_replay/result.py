@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import pandas as pd
 
     from medkit_replay.model import (
@@ -59,10 +61,10 @@ class Result:
     tool_version: str
     inputs: tuple[InputSummary, ...]
     faults: tuple[FaultSnapshot, ...]
-    events: tuple[FaultEvent, ...]
-    transitions: tuple[Transition, ...]
-    reports: tuple[ReportRecord, ...]
-    clears: tuple[ClearRecord, ...]
+    events: Sequence[FaultEvent]
+    transitions: Sequence[Transition]
+    reports: Sequence[ReportRecord]
+    clears: Sequence[ClearRecord]
     muted_faults: tuple[MutedFault, ...]
     clusters: tuple[Cluster, ...]
     near_misses: tuple[NearMiss, ...]

@@ -5,6 +5,7 @@ Schema history: v1 (0.1.0) — first version. Byte-identical for the same Result
 
 from __future__ import annotations
 
+import io
 import json
 from typing import IO, TYPE_CHECKING
 
@@ -21,6 +22,9 @@ if TYPE_CHECKING:
         Transition,
     )
     from medkit_replay.result import Result
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 SCHEMA = "medkit-replay/report/v1"
 JsonObject = dict[str, object]
@@ -148,49 +152,91 @@ def input_dict(summary: InputSummary) -> JsonObject:
     }
 
 
-def to_report(result: Result) -> JsonObject:
-    """The whole report as a JSON-ready dict, keys in the contract's order."""
+class _Rows:
+    """A list written item by item, so a long report is never held in memory whole."""
+
+    def __init__(self, items: Iterable[JsonObject]) -> None:
+        self.items = items
+
+
+def _sections(result: Result) -> list[tuple[str, object]]:
+    """The report's keys in the contract's order; long lists stay lazy."""
     summary = result.summary
+    return [
+        ("schema", SCHEMA),
+        ("tool_version", result.tool_version),
+        ("inputs", [input_dict(i) for i in result.inputs]),
+        ("faults", [fault_dict(f) for f in result.faults]),
+        ("events", _Rows(event_dict(e) for e in result.events)),
+        ("transitions", _Rows(transition_dict(t) for t in result.transitions)),
+        ("reports", _Rows(report_dict(r) for r in result.reports)),
+        ("clears", _Rows(clear_dict(c) for c in result.clears)),
+        ("muted_faults", [muted_dict(m) for m in result.muted_faults]),
+        ("clusters", [cluster_dict(c) for c in result.clusters]),
+        ("near_misses", _Rows(near_miss_dict(n) for n in result.near_misses)),
+        (
+            "retroactive_cluster_mutes",
+            [
+                {"t_ns": r.t_ns, "cluster_id": r.cluster_id, "fault_codes": list(r.fault_codes)}
+                for r in result.retroactive_mutes
+            ],
+        ),
+        ("parity", result.parity),
+        ("warnings", list(result.warnings)),
+        (
+            "summary",
+            {
+                "messages_read": summary.messages_read,
+                "reports": summary.reports,
+                "reports_accepted": summary.reports_accepted,
+                "reports_rejected": summary.reports_rejected,
+                "clears": summary.clears,
+                "events": dict(summary.events),
+                "faults": summary.faults,
+                "faults_by_status": dict(summary.faults_by_status),
+                "transitions": summary.transitions,
+                "start_ns": summary.start_ns,
+                "end_ns": summary.end_ns,
+                "duration_ns": summary.duration_ns,
+            },
+        ),
+    ]
+
+
+def to_report(result: Result) -> JsonObject:
+    """The whole report as a JSON-ready dict (materialises every list)."""
     return {
-        "schema": SCHEMA,
-        "tool_version": result.tool_version,
-        "inputs": [input_dict(i) for i in result.inputs],
-        "faults": [fault_dict(f) for f in result.faults],
-        "events": [event_dict(e) for e in result.events],
-        "transitions": [transition_dict(t) for t in result.transitions],
-        "reports": [report_dict(r) for r in result.reports],
-        "clears": [clear_dict(c) for c in result.clears],
-        "muted_faults": [muted_dict(m) for m in result.muted_faults],
-        "clusters": [cluster_dict(c) for c in result.clusters],
-        "near_misses": [near_miss_dict(n) for n in result.near_misses],
-        "retroactive_cluster_mutes": [
-            {"t_ns": r.t_ns, "cluster_id": r.cluster_id, "fault_codes": list(r.fault_codes)}
-            for r in result.retroactive_mutes
-        ],
-        "parity": result.parity,
-        "warnings": list(result.warnings),
-        "summary": {
-            "messages_read": summary.messages_read,
-            "reports": summary.reports,
-            "reports_accepted": summary.reports_accepted,
-            "reports_rejected": summary.reports_rejected,
-            "clears": summary.clears,
-            "events": dict(summary.events),
-            "faults": summary.faults,
-            "faults_by_status": dict(summary.faults_by_status),
-            "transitions": summary.transitions,
-            "start_ns": summary.start_ns,
-            "end_ns": summary.end_ns,
-            "duration_ns": summary.duration_ns,
-        },
+        key: list(value.items) if isinstance(value, _Rows) else value
+        for key, value in _sections(result)
     }
 
 
-def dumps(result: Result) -> str:
-    """The report as text: two-space indent, ASCII-only, trailing newline."""
-    return json.dumps(to_report(result), indent=2, ensure_ascii=True) + "\n"
+def _dump(value: object, indent: str) -> str:
+    text = json.dumps(value, indent=2, ensure_ascii=True)
+    return text.replace("\n", "\n" + indent)
 
 
 def write_json(result: Result, stream: IO[str]) -> None:
-    """Write the report to an open text stream."""
-    stream.write(dumps(result))
+    """Stream the report: the same bytes as ``json.dumps(to_report(r), indent=2)`` plus a newline.
+
+    Two-space indent, ASCII-only, keys in the contract's order.
+    """
+    stream.write("{")
+    for number, (key, value) in enumerate(_sections(result)):
+        stream.write(("," if number else "") + f"\n  {json.dumps(key)}: ")
+        if not isinstance(value, _Rows):
+            stream.write(_dump(value, "  "))
+            continue
+        empty = True
+        for item in value.items:
+            stream.write(("[\n    " if empty else ",\n    ") + _dump(item, "    "))
+            empty = False
+        stream.write("[]" if empty else "\n  ]")
+    stream.write("\n}\n")
+
+
+def dumps(result: Result) -> str:
+    """The report as text (held in memory; prefer write_json for big recordings)."""
+    buffer = io.StringIO()
+    write_json(result, buffer)
+    return buffer.getvalue()

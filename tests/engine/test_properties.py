@@ -126,7 +126,7 @@ def test_each_report_obeys_counter_status_and_event_rules(
         n_events = len(manager.output.events)
         n_transitions = len(manager.output.transitions)
         timeline.apply(request)
-        new_events = manager.output.events[n_events:]
+        new_events = list(manager.output.events)[n_events:]
         if isinstance(request, ClearRequest):
             assert all(e.event_type == "fault_cleared" for e in new_events)
             continue

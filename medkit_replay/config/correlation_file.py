@@ -1,0 +1,230 @@
+"""The correlation YAML read as upstream's config_parser reads it, and loaded as the node loads it.
+
+Parsing follows correlation.md §2 (yaml-cpp 0.7 rules); loading follows §1.1 (never fatal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from medkit_replay.config.yamlcpp import (
+    YamlCppError,
+    as_bool,
+    as_string,
+    as_uint32,
+    compose,
+    is_map,
+    is_scalar,
+    is_sequence,
+    line_of,
+    map_items,
+    sequence_items,
+    subscript,
+)
+from medkit_replay.engine.correlation.rules import (
+    CorrelationConfig,
+    CorrelationRule,
+    Mode,
+    Representative,
+    string_to_mode,
+    string_to_representative,
+    validate_config,
+)
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from medkit_replay.config.yamlcpp import Node
+
+_OFF = "correlation is off for this run"
+
+
+class InvalidArgumentError(ValueError):
+    """Upstream's std::invalid_argument (bad `mode` or `representative`): exact text, plus line."""
+
+    def __init__(self, message: str, line: int | None) -> None:
+        super().__init__(message)
+        self.line = line
+
+
+@dataclass(frozen=True, slots=True)
+class CorrelationLoad:
+    """What the node ends up with: an engine config (None = no engine) and what it logged."""
+
+    config: CorrelationConfig | None
+    warnings: tuple[str, ...]
+
+
+# -- upstream's getters: a key is read only when its value is a (non-null) scalar -------------
+
+
+def _get_string(node: Node | None, key: str, default: str = "") -> str:
+    value = subscript(node, key)
+    return as_string(value) if value is not None and is_scalar(value) else default
+
+
+def _get_bool(node: Node | None, key: str, default: bool) -> bool:
+    value = subscript(node, key)
+    return as_bool(value) if value is not None and is_scalar(value) else default
+
+
+def _get_uint32(node: Node | None, key: str, default: int) -> int:
+    value = subscript(node, key)
+    return as_uint32(value) if value is not None and is_scalar(value) else default
+
+
+def _get_string_array(node: Node | None, key: str) -> tuple[str, ...]:
+    value = subscript(node, key)
+    if value is None or not is_sequence(value):
+        return ()
+    return tuple(as_string(item) for item in sequence_items(value) if is_scalar(item))
+
+
+# -- sections --------------------------------------------------------------------------------
+
+
+def _parse_patterns(node: Node | None) -> dict[str, tuple[str, ...]]:
+    patterns: dict[str, tuple[str, ...]] = {}
+    if node is None or not is_map(node):
+        return patterns
+    for key, value in map_items(node):
+        patterns[as_string(key)] = _get_string_array(value, "codes")  # a duplicate id: last wins
+    return dict(sorted(patterns.items()))  # std::map order (UTF-8 byte order = code points)
+
+
+def _pattern_refs(node: Node | None, *, with_inline: bool) -> tuple[list[str], list[str]]:
+    pattern_ids: list[str] = []
+    inline_codes: list[str] = []
+    if node is None or not is_sequence(node):
+        return pattern_ids, inline_codes
+    for item in sequence_items(node):
+        if not is_map(item):
+            continue
+        pattern = subscript(item, "pattern")
+        if pattern is not None:  # a null `pattern:` still counts, as the id "null"
+            pattern_ids.append(as_string(pattern))
+            continue
+        codes = subscript(item, "codes")
+        if with_inline and codes is not None and is_sequence(codes):
+            inline_codes.extend(as_string(c) for c in sequence_items(codes) if is_scalar(c))
+    return pattern_ids, inline_codes
+
+
+def _mode(node: Node) -> Mode:
+    try:
+        return string_to_mode(_get_string(node, "mode", "hierarchical"))
+    except ValueError as exc:
+        raise InvalidArgumentError(str(exc), _line_of_key(node, "mode")) from exc
+
+
+def _representative(node: Node) -> Representative:
+    try:
+        return string_to_representative(_get_string(node, "representative", "highest_severity"))
+    except ValueError as exc:
+        raise InvalidArgumentError(str(exc), _line_of_key(node, "representative")) from exc
+
+
+def _line_of_key(node: Node, key: str) -> int | None:
+    value = subscript(node, key)
+    return None if value is None else line_of(value)
+
+
+def _parse_rule(node: Node, default_window_ms: int) -> CorrelationRule:
+    rule_id = _get_string(node, "id")
+    name = _get_string(node, "name", rule_id)
+    mode = _mode(node)
+    window_ms = _get_uint32(node, "window_ms", default_window_ms)
+    if mode == "hierarchical":
+        root_codes: tuple[str, ...] = ()
+        root_cause = subscript(node, "root_cause")
+        if root_cause is not None and subscript(root_cause, "codes") is not None:
+            root_codes = _get_string_array(root_cause, "codes")
+        symptom_ids, inline_codes = _pattern_refs(subscript(node, "symptoms"), with_inline=True)
+        return CorrelationRule(
+            id=rule_id,
+            name=name,
+            mode=mode,
+            window_ms=window_ms,
+            root_cause_codes=root_codes,
+            symptom_pattern_ids=tuple(symptom_ids),
+            inline_symptom_codes=tuple(inline_codes),
+            mute_symptoms=_get_bool(node, "mute_symptoms", True),
+            auto_clear_with_root=_get_bool(node, "auto_clear_with_root", True),
+        )
+    match_ids, _ = _pattern_refs(subscript(node, "match"), with_inline=False)
+    min_count = _get_uint32(node, "min_count", 3)
+    show_as_single = _get_bool(node, "show_as_single", True)
+    representative = _representative(node)
+    return CorrelationRule(
+        id=rule_id,
+        name=name,
+        mode=mode,
+        window_ms=window_ms,
+        match_pattern_ids=tuple(match_ids),
+        min_count=min_count,
+        show_as_single=show_as_single,
+        representative=representative,
+    )
+
+
+def parse_correlation_config(text: str | bytes) -> CorrelationConfig:
+    """Upstream's parse_config_string (correlation.md §2).
+
+    Raises YamlCppError where yaml-cpp throws (syntax, BadSubscript, bad conversion) and
+    InvalidArgumentError (a ValueError with upstream's exact text) for a bad mode/representative.
+    """
+    root = compose(text)
+    correlation = subscript(root, "correlation")
+    if correlation is None:
+        return CorrelationConfig(enabled=False)
+    if not _get_bool(correlation, "enabled", False):
+        return CorrelationConfig(enabled=False)  # nothing else is read
+    default_window_ms = _get_uint32(correlation, "default_window_ms", 500)
+    patterns = _parse_patterns(subscript(correlation, "patterns"))
+    rules_node = subscript(correlation, "rules")
+    rules: list[CorrelationRule] = []
+    if rules_node is not None and is_sequence(rules_node):
+        rules = [_parse_rule(item, default_window_ms) for item in sequence_items(rules_node)]
+    return CorrelationConfig(
+        enabled=True,
+        default_window_ms=default_window_ms,
+        patterns=patterns,
+        rules=tuple(rules),
+    )
+
+
+def _no_engine(where: str, message: str) -> CorrelationLoad:
+    return CorrelationLoad(None, (f"{where}: {message}; {_OFF}",))
+
+
+def load_correlation(path: Path) -> CorrelationLoad:
+    """The node's create_correlation_engine on a file: parse, validate, never fatal (§1.1).
+
+    Every message is prefixed with the file path (and the line when one is known).
+    """
+    if not path.exists():
+        return _no_engine(f"{path}", "Correlation config file not found")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        what = f"Cannot open correlation config file: {path} ({exc.strerror or exc})"
+        return _no_engine(f"{path}", f"Failed to load correlation config: {what}")
+    try:
+        config = parse_correlation_config(data)
+    except (YamlCppError, InvalidArgumentError) as exc:
+        where = f"{path}:{exc.line}" if exc.line is not None else f"{path}"
+        return _no_engine(where, f"Failed to load correlation config: {exc}")
+    if not config.enabled:
+        return _no_engine(f"{path}", "Correlation explicitly disabled in config")
+    validation = validate_config(config)
+    messages = [f"{path}: Correlation config: {warning}" for warning in validation.warnings]
+    if not validation.valid:
+        messages.extend(f"{path}: Correlation config error: {error}" for error in validation.errors)
+        count = len(validation.errors)
+        messages.append(
+            f"{path}: CORRELATION IS DISABLED FOR THIS RUN: {count} validation "
+            f"error{'s' if count != 1 else ''} (upstream creates no correlation engine)"
+        )
+        return CorrelationLoad(None, tuple(messages))
+    return CorrelationLoad(config, tuple(messages))
