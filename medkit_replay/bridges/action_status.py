@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Protocol, Self, cast
 
 from medkit_replay.bridges.base import FaultReporter, passes_lists
 from medkit_replay.bridges.codes import action_code_prefix, action_fault_code
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 from medkit_replay.engine.local_filter import LocalFilterConfig
+from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence

@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING, Protocol, Self, cast
 
 from medkit_replay.bridges.base import ReporterCache, resolve_topic
 from medkit_replay.bridges.codes import upper_snake
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import Severity
+from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence

@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING, Protocol, Self, cast
 
 from medkit_replay.bridges.base import ReporterCache, any_substring, passes_lists, resolve_topic
 from medkit_replay.bridges.codes import log_code_prefix, log_fault_code
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import NS_PER_SEC, Severity
+from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from collections.abc import Mapping

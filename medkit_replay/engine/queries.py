@@ -14,9 +14,6 @@ from medkit_replay.model import FaultSnapshot, Status
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-if TYPE_CHECKING:
-    from collections.abc import Iterable
-
 FaultT = TypeVar("FaultT", FaultRecord, FaultSnapshot)
 
 KNOWN_STATUSES: tuple[Status, ...] = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
