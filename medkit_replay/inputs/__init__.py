@@ -1,0 +1,32 @@
+"""Inputs: recording files turned into one time-ordered stream of decoded, typed messages.
+
+rosbag2 directories (metadata.yaml; sqlite3 or MCAP storage; split files; zstd file or message
+compression) and bare ``.mcap`` / ``.db3`` files are read streaming and read-only; several inputs
+merge in (log time, input index, position) order. Only the topics the replay needs are decoded
+(:class:`Selection`), with rosbags, from the recording's own definitions or bundled ones.
+Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
+can be read raises :class:`~medkit_replay.errors.InputError`.
+
+    with open_recording(["run_bag/"], rosout=True) as recording:
+        for message in recording.messages():
+            ...
+        summaries = recording.inputs
+"""
+
+from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
+from medkit_replay.inputs.selection import Role, Selection, normalize_typename
+from medkit_replay.inputs.source import Input, InputContext, Message, Opener
+
+__all__ = [
+    "READERS",
+    "Input",
+    "InputContext",
+    "Message",
+    "Opener",
+    "Recording",
+    "Role",
+    "Selection",
+    "input_kind",
+    "normalize_typename",
+    "open_recording",
+]

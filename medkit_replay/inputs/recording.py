@@ -1,0 +1,141 @@
+"""A recording: several inputs opened together and merged into one time-ordered message stream.
+
+Chooses a reader per input through READERS; the only place inputs are opened and closed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from medkit_replay.errors import InputError
+from medkit_replay.inputs.merge import merge
+from medkit_replay.inputs.rosbag2 import open_directory, open_file
+from medkit_replay.inputs.selection import Selection
+from medkit_replay.inputs.source import InputContext
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Iterator
+    from types import TracebackType
+    from typing import Self
+
+    from medkit_replay.inputs.source import Input, Message, Opener
+    from medkit_replay.model import InputSummary
+
+READERS: dict[str, Opener] = {
+    "dir": open_directory,
+    ".mcap": open_file,
+    ".db3": open_file,
+}
+"""Input openers by kind: ``dir`` for a directory, else the file's lower-cased suffix."""
+
+
+def input_kind(path: Path) -> str:
+    """The READERS key for a path: ``dir`` or its lower-cased suffix."""
+    return "dir" if path.is_dir() else path.suffix.lower()
+
+
+class Recording:
+    """Opened inputs read as one recording; use as a context manager.
+
+    Attributes:
+        warnings: what the user should know, in the order found (losses, skipped topics...).
+    """
+
+    def __init__(self, inputs: list[Input], warnings: list[str]) -> None:
+        self._inputs = inputs
+        self.warnings = warnings
+        self._used = False
+
+    def messages(self) -> Iterator[Message]:
+        """Yield every selected message of every input once, ordered by (log time, input, position).
+
+        Raises:
+            RuntimeError: called a second time.
+        """
+        if self._used:
+            raise RuntimeError("Recording.messages() can be read only once")
+        self._used = True
+        return (merged.item for merged in merge([i.messages() for i in self._inputs]))
+
+    @property
+    def inputs(self) -> tuple[InputSummary, ...]:
+        """One summary per input, in input order; final once :meth:`messages` is exhausted."""
+        return tuple(i.summary() for i in self._inputs)
+
+    def close(self) -> None:
+        """Close every input (temporary copies are deleted); safe to call twice."""
+        for opened in self._inputs:
+            opened.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def open_recording(
+    paths: Iterable[str | Path],
+    *,
+    rosout: bool = False,
+    diagnostics_topics: Iterable[str] = ("/diagnostics",),
+    extra_topics: Iterable[str] = (),
+) -> Recording:
+    """Open inputs to be read as one recording.
+
+    Args:
+        paths: rosbag2 directories, ``.mcap`` or ``.db3`` files (any kind READERS knows).
+        rosout: also read ``/rosout`` (for the log bridge).
+        diagnostics_topics: topics of type DiagnosticArray to read.
+        extra_topics: further topics to read whatever their type (role ``extra``).
+
+    Returns:
+        The opened recording; close it (``with``) to release files and temporary copies.
+
+    Raises:
+        InputError: no input given, an input is missing or of an unknown kind, or nothing at
+            all can be read from one; the inputs opened before it are closed again.
+    """
+    selection = Selection(
+        rosout=rosout,
+        diagnostics_topics=tuple(diagnostics_topics),
+        extra_topics=tuple(extra_topics),
+    )
+    warnings: list[str] = []
+
+    def sink(text: str) -> None:
+        warnings.append(" ".join(text.splitlines()))  # one line each, whatever a file contained
+
+    inputs: list[Input] = []
+    try:
+        for index, raw_path in enumerate(paths):
+            path = Path(raw_path)
+            if not path.exists():
+                raise InputError("input not found", path=str(path))
+            opener = READERS.get(input_kind(path))
+            if opener is None:
+                kinds = ", ".join(sorted(k for k in READERS if k != "dir"))
+                raise InputError(
+                    f"unsupported input (expected a rosbag2 directory or a {kinds} file)",
+                    path=str(path),
+                )
+            context = InputContext(index, selection, sink)
+            try:
+                inputs.append(opener(path, context))
+            except OSError as exc:
+                raise InputError(
+                    f"cannot be read ({exc.strerror or exc})", path=str(path)
+                ) from None
+        if not inputs:
+            raise InputError("no input given")
+    except BaseException:
+        for opened in inputs:
+            opened.close()
+        raise
+    return Recording(inputs, warnings)

@@ -1,0 +1,350 @@
+"""rosbag2 inputs: a bag directory (metadata.yaml, split files, compression) or one bare file.
+
+Chains an input's storage files, restores time order, selects topics and decodes them; never writes.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path, PurePath
+from tempfile import TemporaryDirectory
+from typing import TYPE_CHECKING
+
+import yaml
+
+from medkit_replay.errors import InputError
+from medkit_replay.inputs.db3 import Db3File
+from medkit_replay.inputs.mcap import McapFile
+from medkit_replay.inputs.merge import Timed, reorder
+from medkit_replay.inputs.source import Message
+from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
+from medkit_replay.inputs.typestore import DecodeError, Decoder, DefinitionError, make_decoder
+from medkit_replay.model import InputSummary, TopicSummary
+
+if sys.version_info >= (3, 14):
+    from compression import zstd
+else:  # the zstd binding rosbags itself depends on
+    from backports import zstd
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+
+    from medkit_replay.inputs.merge import Bound, Position
+    from medkit_replay.inputs.selection import Role
+    from medkit_replay.inputs.source import InputContext
+    from medkit_replay.inputs.storage import Connection, Raw, StorageFile
+
+STORAGE_FILES: dict[str, Callable[[Path, int, Callable[[str], None]], StorageFile]] = {
+    ".mcap": McapFile,
+    ".db3": Db3File,
+}
+"""Storage file readers by suffix (after a ``.zstd`` file-compression suffix is removed)."""
+
+ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"  # a CDR payload starts with 00 0x instead, so this cannot clash
+MAX_HELD = 100_000
+"""Most messages held to restore time order; beyond it the oldest leaves, later ones may be late."""
+
+
+@dataclass(slots=True)
+class _Metadata:
+    """What the replay uses of metadata.yaml (rosbag2 versions 1 to 9)."""
+
+    storage: str | None = None
+    files: list[str] = field(default_factory=list)
+    starts: dict[str, int] = field(default_factory=dict)
+    compression_format: str = ""
+    compression_mode: str = ""
+
+
+def _one_line(exc: BaseException | str) -> str:
+    return " ".join(str(exc).split())
+
+
+def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | None:
+    """Parse metadata.yaml leniently; None (with a warning) when it is missing or unusable."""
+    path = directory / "metadata.yaml"
+    if not path.is_file():
+        return None
+    try:
+        document = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        warn(f"{path}: cannot be read ({_one_line(exc)})")
+        return None
+    info = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
+    if not isinstance(info, dict):
+        warn(f"{path}: has no rosbag2_bagfile_information")
+        return None
+    version = info.get("version")
+    if isinstance(version, int) and version > 9:
+        warn(f"{path}: metadata version {version} is newer than 9, the newest known; read as 9")
+    meta = _Metadata(storage=str(info.get("storage_identifier") or "") or None)
+    for name in info.get("relative_file_paths") or ():
+        if isinstance(name, str):
+            meta.files.append(PurePath(name).name)  # before version 4 the bag folder is included
+    for entry in info.get("files") or ():
+        name = entry.get("path") if isinstance(entry, dict) else None
+        if not isinstance(name, str):
+            continue
+        name = PurePath(name).name
+        if name not in meta.files:
+            meta.files.append(name)
+        start = (entry.get("starting_time") or {}).get("nanoseconds_since_epoch")
+        if isinstance(start, int):
+            meta.starts[name] = start
+    meta.compression_format = str(info.get("compression_format") or "").lower()
+    mode = str(info.get("compression_mode") or "").lower()
+    meta.compression_mode = "" if mode == "none" else mode
+    return meta
+
+
+def _natural_key(path: Path) -> list[int | str]:
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
+
+
+def _storage_files(directory: Path) -> list[Path]:
+    found = [
+        p
+        for p in directory.iterdir()
+        if p.is_file() and PurePath(p.name.removesuffix(".zstd")).suffix in STORAGE_FILES
+    ]
+    return sorted(found, key=_natural_key)
+
+
+def open_directory(path: Path, ctx: InputContext) -> Rosbag2Input:
+    """Open a rosbag2 directory; without a usable metadata.yaml, read the storage files in it.
+
+    Raises:
+        InputError: no storage file in it can be read at all.
+    """
+    meta = _read_metadata(path, ctx.warn)
+    found = _storage_files(path)
+    if meta is None:
+        if not found:
+            raise InputError("no metadata.yaml and no .mcap or .db3 file in it", path=str(path))
+        names = ", ".join(p.name for p in found)
+        ctx.warn(
+            f"{path}: no usable metadata.yaml; reading the storage files in name order: {names}"
+        )
+        return Rosbag2Input(path, ctx, found, _Metadata())
+    listed = [path / name for name in meta.files]
+    for missing in (p for p in listed if not p.exists()):
+        ctx.warn(f"{missing}: listed in metadata.yaml but missing; its messages are lost")
+    unlisted = [p for p in found if p not in listed]
+    if unlisted:
+        names = ", ".join(p.name for p in unlisted)
+        ctx.warn(f"{path}: {names} not listed in metadata.yaml; read after the listed files")
+    files = [p for p in listed if p.exists()] + unlisted
+    if not files:
+        raise InputError("metadata.yaml lists no storage file that exists", path=str(path))
+    return Rosbag2Input(path, ctx, files, meta)
+
+
+def open_file(path: Path, ctx: InputContext) -> Rosbag2Input:
+    """Open one bare ``.mcap`` or ``.db3`` file (no metadata.yaml), e.g. a medkit download.
+
+    Raises:
+        InputError: the file is not a readable bag.
+    """
+    return Rosbag2Input(path, ctx, [path], _Metadata())
+
+
+class Rosbag2Input:
+    """The storage files of one input chained into one stream sorted by (log time, position)."""
+
+    def __init__(self, path: Path, ctx: InputContext, paths: list[Path], meta: _Metadata) -> None:
+        self.path = path
+        self.ctx = ctx
+        self._meta = meta
+        self._warned: set[str] = set()
+        self._temp: TemporaryDirectory[str] | None = None
+        self._files: list[StorageFile] = []
+        self._readers: dict[tuple[int, int], tuple[Role, Decoder]] = {}
+        self._failures: dict[str, tuple[int, int, str]] = {}
+        self._late: tuple[int, int] = (0, 0)  # how many, first time
+        self._used = False
+        self._message_zstd = meta.compression_mode == "message"
+        if meta.compression_mode and meta.compression_format != "zstd":
+            self._warn(f"compression {meta.compression_format!r} is not supported")
+        problems = []
+        try:
+            for file_no, file_path in enumerate(paths):
+                try:
+                    self._files.append(self._open_file(file_path, file_no))
+                except NotABagError as exc:
+                    problems.append(str(exc) if file_path == path else f"{file_path.name}: {exc}")
+                    if len(paths) > 1:
+                        self.ctx.warn(f"{file_path}: {exc}; skipped")
+        except BaseException:
+            self.close()
+            raise
+        if not self._files:
+            self.close()
+            if paths == [path]:
+                raise InputError(_one_line(problems[0]), path=str(path))
+            detail = _one_line("; ".join(problems))
+            raise InputError(f"nothing readable ({detail})", path=str(path))
+        self.storage = meta.storage or self._files[0].storage
+        # No bound of file k may pass the start of a later file: split files can overlap a little.
+        starts = [meta.starts.get(f.path.name, f.start_ns) for f in self._files]
+        self._caps = [
+            min((s for s in starts[k + 1 :] if s is not None), default=None)
+            for k in range(len(starts))
+        ]
+
+    def _open_file(self, path: Path, file_no: int) -> StorageFile:
+        name = path.name
+        if name.endswith(".zstd"):
+            path = self._decompress(path)
+            name = name.removesuffix(".zstd")
+        opener = STORAGE_FILES.get(PurePath(name).suffix)
+        if opener is None:
+            opener = McapFile if self._meta.storage == "mcap" else Db3File
+        return opener(path, file_no, self.ctx.warn)
+
+    def _decompress(self, path: Path) -> Path:
+        """Stream a file-compressed storage file into a temporary directory (kept until close).
+
+        Writes as it decompresses, so a file cut short still yields everything before the cut.
+        """
+        if self._temp is None:
+            self._temp = TemporaryDirectory(prefix="medkit-replay-")
+        target = Path(self._temp.name, path.name.removesuffix(".zstd"))
+        decompressor = zstd.ZstdDecompressor()
+        try:
+            with path.open("rb") as source, target.open("wb") as sink:
+                while not decompressor.eof:
+                    block = source.read(1 << 20) if decompressor.needs_input else b""
+                    if decompressor.needs_input and not block:
+                        raise EOFError("compressed file ends before its end-of-stream marker")
+                    sink.write(decompressor.decompress(block, max_length=1 << 20))
+        except (OSError, EOFError, zstd.ZstdError) as exc:
+            if not target.is_file() or not target.stat().st_size:
+                raise NotABagError(f"cannot be decompressed ({_one_line(exc)})") from None
+            self.ctx.warn(f"{path}: compressed data is damaged ({_one_line(exc)}); read the rest")
+        return target
+
+    def _warn(self, text: str) -> None:
+        text = f"{self.path}: {text}"
+        if text not in self._warned:
+            self._warned.add(text)
+            self.ctx.warn(text)
+
+    def _accepts(self, file_no: int) -> Callable[[Connection], bool]:
+        def accept(connection: Connection) -> bool:
+            topic, msgtype = connection.topic, connection.msgtype
+            role, reason = self.ctx.selection.classify(topic, msgtype)
+            if role is None:
+                if reason:
+                    self._warn(reason)
+                return False
+            if connection.serialization != "cdr":
+                fmt = connection.serialization
+                self._warn(f"topic {topic} is serialized as {fmt!r}, not CDR; not read")
+                return False
+            try:
+                decoder, problem = make_decoder(
+                    msgtype, connection.definition, lambda note: self._warn(f"{topic}: {note}")
+                )
+            except DefinitionError as exc:
+                self._warn(f"topic {topic} cannot be decoded: {exc}; not read")
+                return False
+            if problem:
+                self._warn(f"{topic}: recorded definition unusable ({problem}); using the bundled")
+            self._readers[(file_no, connection.id)] = (role, decoder)
+            return True
+
+        return accept
+
+    def _raw(self) -> Iterator[Bound | Timed[Raw]]:
+        for file_no, file in enumerate(self._files):
+            try:
+                yield from file.read(self._accepts(file_no), self._caps[file_no])
+            except Exception as exc:  # last resort: no reader failure may end the replay
+                self.ctx.warn(f"{file.path}: reading stopped ({type(exc).__name__}: {exc})")
+
+    def messages(self) -> Iterator[Timed[Message]]:
+        """Yield the selected, decoded messages once, sorted by (log time, position)."""
+        if self._used:
+            raise RuntimeError(f"{self.path}: messages() can be read only once")
+        self._used = True
+        try:
+            for t_ns, position, raw in reorder(self._raw(), self._on_late, MAX_HELD):
+                message = self._decode(t_ns, position, raw)
+                if message is not None:
+                    yield Timed(t_ns, position, message)
+        finally:
+            self._report_losses()
+
+    def _on_late(self, item: Timed[Raw]) -> None:
+        count, first = self._late
+        self._late = (count + 1, first if count else item.t_ns)
+
+    def _decode(self, t_ns: int, position: Position, raw: Raw) -> Message | None:
+        role, decoder = self._readers[(position[0], raw.connection.id)]
+        topic = raw.connection.topic
+        try:
+            data = raw.data
+            if self._message_zstd or bytes(data[:4]) == ZSTD_MAGIC:
+                data = _unzstd(data)
+            msg = decoder.decode(data)
+        except (DecodeError, ValueError, zstd.ZstdError) as exc:
+            count, first, reason = self._failures.get(topic, (0, t_ns, _one_line(exc)))
+            self._failures[topic] = (count + 1, first, reason)
+            return None
+        return Message(t_ns, self.ctx.input_index, topic, raw.connection.msgtype, role, msg)
+
+    def _report_losses(self) -> None:
+        for topic, (count, first, reason) in sorted(self._failures.items()):
+            self._warn(
+                f"{count} messages on {topic} cannot be decoded and were skipped "
+                f"(first at t={first}: {reason})"
+            )
+        if self._late[0]:
+            self._warn(
+                f"{self._late[0]} messages are stored too far out of time order to be "
+                f"replayed in order and were skipped (first at t={self._late[1]})"
+            )
+
+    def summary(self) -> InputSummary:
+        """Topics (all of them, with role where read), counts and time span of this input."""
+        counts: dict[tuple[str, str], int] = {}
+        roles: dict[tuple[str, str], Role] = {}
+        for file_no, file in enumerate(self._files):
+            for cid, connection in file.connections.items():
+                key = (connection.topic, connection.msgtype)
+                counts[key] = counts.get(key, 0) + file.counts.get(cid, 0)
+                if (file_no, cid) in self._readers:
+                    roles[key] = self._readers[(file_no, cid)][0]
+        starts = [f.start_ns for f in self._files if f.start_ns is not None]
+        ends = [f.end_ns for f in self._files if f.end_ns is not None]
+        return InputSummary(
+            path=str(self.path),
+            storage=self.storage,
+            start_ns=min(starts, default=None),
+            end_ns=max(ends, default=None),
+            message_count=sum(sum(f.counts.values()) for f in self._files),
+            topics=tuple(
+                TopicSummary(topic=topic, type=msgtype, role=roles.get(key), messages=count)
+                for key, count in sorted(counts.items())
+                for topic, msgtype in (key,)
+            ),
+        )
+
+    def close(self) -> None:
+        """Delete temporary copies; safe to call twice."""
+        for file in self._files:
+            file.close()
+        if self._temp is not None:
+            self._temp.cleanup()
+            self._temp = None
+
+
+def _unzstd(data: bytes | memoryview) -> bytes:
+    """Undo rosbag2's per-message compression, allocating at most RECORD_SIZE_LIMIT bytes."""
+    decompressor = zstd.ZstdDecompressor()
+    out = decompressor.decompress(bytes(data), max_length=RECORD_SIZE_LIMIT)
+    if not decompressor.eof:
+        raise ValueError("compressed payload is cut off or larger than the size limit")
+    return out

@@ -1,0 +1,93 @@
+"""Which recorded topics the replay reads, recognised by type and name (SEMANTICS.md §2).
+
+Pure: decides from a topic's name and type alone; no I/O and no decoding.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Literal
+
+Role = Literal[
+    "action_status", "diagnostics", "report_fault", "clear_fault", "fault_events", "rosout", "extra"
+]
+
+ACTION_STATUS_TYPE = "action_msgs/msg/GoalStatusArray"
+DIAGNOSTICS_TYPE = "diagnostic_msgs/msg/DiagnosticArray"
+REPORT_FAULT_EVENT_TYPE = "ros2_medkit_msgs/srv/ReportFault_Event"
+CLEAR_FAULT_EVENT_TYPE = "ros2_medkit_msgs/srv/ClearFault_Event"
+FAULT_EVENT_TYPE = "ros2_medkit_msgs/msg/FaultEvent"
+LOG_TYPE = "rcl_interfaces/msg/Log"
+
+# Topic suffixes of the roles read on every namespace: (suffix, role, expected type).
+_SUFFIX_ROLES: tuple[tuple[str, Role, str], ...] = (
+    ("/_action/status", "action_status", ACTION_STATUS_TYPE),
+    ("/report_fault/_service_event", "report_fault", REPORT_FAULT_EVENT_TYPE),
+    ("/clear_fault/_service_event", "clear_fault", CLEAR_FAULT_EVENT_TYPE),
+    ("/fault_manager/events", "fault_events", FAULT_EVENT_TYPE),
+)
+
+_OLD_STYLE = re.compile(r"^(?P<pkg>[^/]+)/(?P<name>[^/]+)$")
+_SRV_AS_MSG = re.compile(r"^(?P<pkg>[^/]+)/srv/msg/(?P<name>[^/]+)$")
+_SERVICE_PARTS = ("_Request", "_Response", "_Event")
+
+
+def normalize_typename(name: str) -> str:
+    """Spell a type name as rosbag2 does today: ``pkg/msg/Name`` or ``pkg/srv/Name_Event``.
+
+    Old bags (before Foxy) store ``pkg/Name``; rosbags' parser files service parts under
+    ``pkg/srv/msg/``. Both are mapped to the current spelling; anything else is kept.
+    """
+    name = name.strip()
+    if match := _OLD_STYLE.match(name):
+        return f"{match['pkg']}/msg/{match['name']}"
+    if match := _SRV_AS_MSG.match(name):
+        kind = "srv" if match["name"].endswith(_SERVICE_PARTS) else "msg"
+        return f"{match['pkg']}/{kind}/{match['name']}"
+    return name
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Selection:
+    """What to read from a recording.
+
+    Attributes:
+        rosout: read ``/rosout`` (rcl_interfaces/msg/Log) for the log bridge.
+        diagnostics_topics: topics read as diagnostics (default ``/diagnostics`` only).
+        extra_topics: further topics delivered with role ``extra``, whatever their type.
+    """
+
+    rosout: bool = False
+    diagnostics_topics: tuple[str, ...] = ("/diagnostics",)
+    extra_topics: tuple[str, ...] = ()
+
+    def classify(self, topic: str, msgtype: str) -> tuple[Role | None, str | None]:
+        """The role of a topic, or why a topic named like a role's input is not read.
+
+        Args:
+            topic: the recorded topic name.
+            msgtype: its type, already normalised (:func:`normalize_typename`).
+
+        Returns:
+            ``(role, None)`` for a topic to read; ``(None, reason)`` for a topic whose name
+            says it is an input but whose type is not the expected one; ``(None, None)`` for
+            every other topic.
+        """
+        if topic in self.extra_topics:
+            return "extra", None
+        if topic in self.diagnostics_topics:
+            return _check(topic, msgtype, "diagnostics", DIAGNOSTICS_TYPE)
+        if self.rosout and topic == "/rosout":
+            return _check(topic, msgtype, "rosout", LOG_TYPE)
+        for suffix, role, expected in _SUFFIX_ROLES:
+            # An action status topic needs an action name before the suffix.
+            if topic.endswith(suffix) and (role != "action_status" or topic != suffix):
+                return _check(topic, msgtype, role, expected)
+        return None, None
+
+
+def _check(topic: str, msgtype: str, role: Role, expected: str) -> tuple[Role | None, str | None]:
+    if msgtype == expected:
+        return role, None
+    return None, f"topic {topic} has type {msgtype or 'unknown'!r}, not {expected}; not read"

@@ -1,0 +1,73 @@
+"""Records shared by the storage readers: connections, raw messages, the reader protocol, limits.
+
+Holds no reading code; the MCAP and sqlite3 readers and the rosbag2 layer above them import it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple, Protocol
+
+from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+    from pathlib import Path
+
+    from medkit_replay.inputs.merge import Bound, Timed
+
+RECORD_SIZE_LIMIT = 1 << 30
+"""Largest record, chunk or payload (bytes) a length field may make a reader allocate.
+
+A length above it, or above what is left of the file, is treated as damage, not obeyed.
+"""
+
+
+class Connection(NamedTuple):
+    """One topic of one storage file, as the file declares it."""
+
+    id: int
+    topic: str
+    msgtype: str
+    serialization: str
+    definition: Definition = NO_DEFINITION
+
+
+class Raw(NamedTuple):
+    """A stored message not yet decoded."""
+
+    connection: Connection
+    data: bytes | memoryview
+
+
+class NotABagError(Exception):
+    """A file cannot be read as the storage its name or metadata claims (nothing readable)."""
+
+
+class StorageFile(Protocol):
+    """One storage file (an ``.mcap`` or ``.db3``), probed when constructed, read on demand.
+
+    After construction ``connections``, ``counts``, ``start_ns`` and ``end_ns`` hold what the
+    file's index declares (or nothing, for a file without one); reading completes them.
+    """
+
+    path: Path
+    storage: str
+    connections: dict[int, Connection]
+    counts: dict[int, int]
+    start_ns: int | None
+    end_ns: int | None
+
+    def read(
+        self, wants: Callable[[Connection], bool], cap_ns: int | None
+    ) -> Iterator[Bound | Timed[Raw]]:
+        """Yield bounds and the messages of the connections ``wants`` accepts, in file order.
+
+        Args:
+            wants: called once per connection, before any of its messages.
+            cap_ns: start of the next file of the same input, if known; no bound exceeds it.
+        """
+        ...
+
+    def close(self) -> None:
+        """Release what the file holds between probing and reading (temporary copies)."""
+        ...
