@@ -5,17 +5,21 @@ The only place the layers meet (besides the CLI, which calls this).
 
 from __future__ import annotations
 
-import heapq
-from dataclasses import dataclass
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from medkit_replay.bridges.action_status import ActionStatusBridge
+from medkit_replay.bridges.diagnostic import DiagnosticBridge
+from medkit_replay.bridges.log import LogBridge
+from medkit_replay.bridges.service_calls import ServiceCallReplayer
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.replay_options import ReplayOptions, replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
-from medkit_replay.inputs.jsonl import open_script
+from medkit_replay.inputs import open_recording
 from medkit_replay.model import (
     ClearRecord,
     ClearRequest,
@@ -26,71 +30,72 @@ from medkit_replay.model import (
     ReportRequest,
     Transition,
 )
+from medkit_replay.parity import RecordedEvent, compare, recorded_event, suggest_action_sources
 from medkit_replay.result import EVENT_KINDS, STATUSES, Result, Summary
 from medkit_replay.spool import Spool
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Iterator, Sequence
+    from collections.abc import Iterable, Sequence
+
+    from medkit_replay.inputs import Message
 
 Request = ReportRequest | ClearRequest
+_BRIDGE_ORIGINS = ("diagnostic_bridge", "action_status_bridge", "log_bridge")
 
 
-@dataclass(frozen=True, slots=True)
-class _Item:
-    """One message of the merged stream and the requests it yields."""
+class _Router:
+    """Hands each message to the bridge for its role and collects what they say."""
 
-    t_ns: int
-    input_index: int
-    position: int
-    requests: tuple[Request, ...]
-
-
-class _ScriptSource:
-    """A JSON-lines script as a stream of items, with its summary filled as it is read."""
-
-    def __init__(self, path: Path, index: int) -> None:
-        self.path = path
-        self.index = index
-        self.count = 0
-        self.start_ns: int | None = None
-        self.end_ns: int | None = None
-
-    def items(self) -> Iterator[_Item]:
-        for position, line in enumerate(open_script(self.path)):
-            t_ns = line.request.t_ns
-            if self.start_ns is None:
-                self.start_ns = t_ns
-            self.end_ns = t_ns
-            self.count += 1
-            yield _Item(t_ns, self.index, position, (line.request,))
-
-    def summary(self) -> InputSummary:
-        return InputSummary(
-            path=str(self.path),
-            storage="jsonl",
-            start_ns=self.start_ns,
-            end_ns=self.end_ns,
-            message_count=self.count,
+    def __init__(self, options: ReplayOptions) -> None:
+        self.diagnostic = DiagnosticBridge(options.diagnostic)
+        self.action = ActionStatusBridge(
+            options.action_status, action_sources=options.action_sources
         )
+        self.log = LogBridge(options.log) if options.log_bridge else None
+        self.services = ServiceCallReplayer()
+        self.recorded_events: Spool[RecordedEvent] = Spool()
+
+    def requests(self, message: Message) -> Sequence[Request]:
+        role, t_ns, topic, msg = message.role, message.t_ns, message.topic, message.msg
+        if role == "script":
+            assert isinstance(msg, ReportRequest | ClearRequest)
+            return (msg,)
+        if role == "action_status":
+            return self.action.on_message(t_ns, topic, msg)
+        if role in ("report_fault", "clear_fault"):
+            return self.services.on_message(t_ns, topic, message.msgtype, msg)
+        if role == "fault_events":
+            self.recorded_events.append(recorded_event(t_ns, topic, msg))
+            return ()
+        if self.diagnostic.wants(topic, message.msgtype):
+            return self.diagnostic.on_message(t_ns, topic, msg)
+        if self.log is not None and self.log.wants(topic, message.msgtype):
+            return self.log.on_message(t_ns, topic, msg)
+        return ()
 
 
-def _open_source(path: Path, index: int) -> _ScriptSource:
-    if path.suffix == ".jsonl":
-        if not path.is_file():
-            raise InputError("input not found", path=str(path))
-        return _ScriptSource(path, index)
-    raise InputError(
-        "unsupported input (expected a .jsonl script, a rosbag2 directory, a .mcap or a .db3 file)",
-        path=str(path),
-    )
+def _recorded_report_codes(inputs: Sequence[Path]) -> set[str]:
+    """Fault codes present in recorded ReportFault traffic (a pre-pass over those topics only)."""
+    services = ServiceCallReplayer()
+    codes: set[str] = set()
+    bags = [p for p in inputs if p.suffix != ".jsonl"]
+    if not bags:
+        return codes
+    with open_recording(bags, only_roles=("report_fault",)) as recording:
+        for message in recording.messages():
+            for request in services.on_message(
+                message.t_ns, message.topic, message.msgtype, message.msg
+            ):
+                codes.add(request.fault_code)
+    return codes
 
 
 def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> Result:
-    """Replay inputs (merged as one recording) through the fault manager.
+    """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
     Args:
-        inputs: JSON-lines scripts, rosbag2 directories, ``.mcap`` or ``.db3`` files.
+        inputs: rosbag2 directories, ``.mcap`` or ``.db3`` files, JSON-lines scripts.
         configs: ROS 2 parameter files, later ones overriding earlier ones key by key.
 
     Raises:
@@ -99,8 +104,12 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
     """
     if not inputs:
         raise InputError("no input given")
+    paths = [Path(p) for p in inputs]
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
+    options, option_warnings = replay_options(params)
+    warnings += option_warnings
+
     events: Spool[FaultEvent] = Spool()
     transitions: Spool[Transition] = Spool()
     reports: Spool[ReportRecord] = Spool()
@@ -108,16 +117,80 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
     output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
     manager = FaultManager(manager_config, output)
     timeline = Timeline(manager)
-    sources = [_open_source(Path(p), i) for i, p in enumerate(inputs)]
-    merged = heapq.merge(
-        *(s.items() for s in sources), key=lambda it: (it.t_ns, it.input_index, it.position)
-    )
+    router = _Router(options)
+    recorded_codes = _recorded_report_codes(paths)
+    withheld: Counter[str] = Counter()
+    withheld_codes: dict[str, set[str]] = {}
+    rosout = router.log is not None
+    extra = (router.log.topic,) if router.log is not None and router.log.topic != "/rosout" else ()
     messages = 0
-    for item in merged:
-        messages += 1
-        timeline.advance(item.t_ns)
-        for request in item.requests:
-            timeline.apply(request)
+    with open_recording(
+        paths, rosout=rosout, diagnostics_topics=(router.diagnostic.topic,), extra_topics=extra
+    ) as recording:
+        for message in recording.messages():
+            messages += 1
+            timeline.advance(message.t_ns)
+            for request in router.requests(message):
+                if request.origin in _BRIDGE_ORIGINS and request.fault_code in recorded_codes:
+                    withheld[request.origin] += 1
+                    withheld_codes.setdefault(request.origin, set()).add(request.fault_code)
+                    continue
+                timeline.apply(request)
+        warnings += recording.warnings
+        summaries = recording.inputs
+    for origin, count in sorted(withheld.items()):
+        warnings.append(
+            f"double counting avoided: {count} request(s) of the simulated {origin} for "
+            f"{len(withheld_codes[origin])} code(s) also in recorded ReportFault traffic were not "
+            "applied; the recorded calls were (rule: recorded service traffic wins per fault code)"
+        )
+    for topic, count in sorted(router.services.metadata_only.items()):
+        if count:
+            warnings.append(
+                f"{topic}: {count} call(s) recorded without their request (metadata-only service "
+                "introspection); they cannot be replayed"
+            )
+    if messages == 0:
+        warnings.append(
+            "no topic the replay reads was found (action status, /diagnostics, ReportFault/"
+            "ClearFault service events, fault manager events"
+            + (", /rosout" if rosout else "")
+            + "); the report is empty"
+        )
+    parity = None
+    if len(router.recorded_events):
+        parity = compare(router.recorded_events, events)
+        suggestion = suggest_action_sources(router.recorded_events, router.action, options)
+        if suggestion:
+            parity["suggested_action_sources"] = suggestion
+            warnings.append(
+                "the live manager saw other reporting sources for action faults; set "
+                "medkit_replay.action_sources to "
+                + ", ".join(f"{a}: {n}" for a, n in suggestion.items())
+            )
+    return _result(
+        manager,
+        timeline,
+        output,
+        summaries,
+        messages,
+        warnings,
+        parity,
+        (events, transitions, reports, clears),
+    )
+
+
+def _result(
+    manager: FaultManager,
+    timeline: Timeline,
+    output: EngineOutput,
+    summaries: Sequence[InputSummary],
+    messages: int,
+    warnings: list[str],
+    parity: dict[str, object] | None,
+    logs: tuple[Spool[FaultEvent], Spool[Transition], Spool[ReportRecord], Spool[ClearRecord]],
+) -> Result:
+    events, transitions, reports, clears = logs
     faults = manager.faults()
     correlation = manager.correlation
     near_misses = [
@@ -129,25 +202,25 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
     for fault in faults:
         by_status[fault.status] += 1
     by_event = dict.fromkeys(EVENT_KINDS, 0)
-    for event in output.events:
+    for event in events:
         by_event[event.event_type] += 1
-    accepted = sum(1 for r in output.reports if r.accepted)
+    accepted = sum(1 for r in reports if r.accepted)
     summary = Summary(
         messages_read=messages,
-        reports=len(output.reports),
+        reports=len(reports),
         reports_accepted=accepted,
-        reports_rejected=len(output.reports) - accepted,
-        clears=len(output.clears),
+        reports_rejected=len(reports) - accepted,
+        clears=len(clears),
         events=by_event,
         faults=len(faults),
         faults_by_status=by_status,
-        transitions=len(output.transitions),
+        transitions=len(transitions),
         start_ns=timeline.t0_ns,
         end_ns=timeline.last_ns,
     )
     return Result(
         tool_version=__version__,
-        inputs=tuple(s.summary() for s in sources),
+        inputs=tuple(summaries),
         faults=tuple(faults),
         events=events,
         transitions=transitions,
@@ -157,6 +230,7 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
         clusters=tuple(correlation.clusters()) if correlation else (),
         near_misses=tuple(near_misses),
         retroactive_mutes=tuple(output.retroactive_mutes),
+        parity=parity,
         warnings=tuple(warnings + output.warnings),
         summary=summary,
     )

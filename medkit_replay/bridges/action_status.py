@@ -244,6 +244,10 @@ class ActionStatusBridge:
             state.desired = NetState.HEALTHY
         return self._reconcile(t_ns, state, action)
 
+    def watched_actions(self) -> list[str]:
+        """Names of the actions seen so far, sorted."""
+        return sorted(self._actions)
+
     def reconcile_pending(self, t_ns: int) -> list[ReportRequest]:
         """Retry every undelivered verdict, in action-name order (the retry timer's pass)."""
         out: list[ReportRequest] = []

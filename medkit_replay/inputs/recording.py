@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import merge
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
+from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
 from medkit_replay.inputs.source import InputContext
 
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
     from types import TracebackType
     from typing import Self
 
+    from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
 
@@ -26,6 +28,7 @@ READERS: dict[str, Opener] = {
     "dir": open_directory,
     ".mcap": open_file,
     ".db3": open_file,
+    ".jsonl": open_script_input,
 }
 """Input openers by kind: ``dir`` for a directory, else the file's lower-cased suffix."""
 
@@ -86,6 +89,7 @@ def open_recording(
     rosout: bool = False,
     diagnostics_topics: Iterable[str] = ("/diagnostics",),
     extra_topics: Iterable[str] = (),
+    only_roles: Iterable[Role] | None = None,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
@@ -94,6 +98,7 @@ def open_recording(
         rosout: also read ``/rosout`` (for the log bridge).
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).
+        only_roles: read only topics of these roles (None: every role).
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -106,6 +111,7 @@ def open_recording(
         rosout=rosout,
         diagnostics_topics=tuple(diagnostics_topics),
         extra_topics=tuple(extra_topics),
+        only_roles=frozenset(only_roles) if only_roles is not None else None,
     )
     warnings: list[str] = []
 

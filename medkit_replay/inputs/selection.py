@@ -10,7 +10,14 @@ from dataclasses import dataclass
 from typing import Literal
 
 Role = Literal[
-    "action_status", "diagnostics", "report_fault", "clear_fault", "fault_events", "rosout", "extra"
+    "action_status",
+    "diagnostics",
+    "report_fault",
+    "clear_fault",
+    "fault_events",
+    "rosout",
+    "extra",
+    "script",
 ]
 
 ACTION_STATUS_TYPE = "action_msgs/msg/GoalStatusArray"
@@ -56,11 +63,13 @@ class Selection:
         rosout: read ``/rosout`` (rcl_interfaces/msg/Log) for the log bridge.
         diagnostics_topics: topics read as diagnostics (default ``/diagnostics`` only).
         extra_topics: further topics delivered with role ``extra``, whatever their type.
+        only_roles: when set, read only topics of these roles (e.g. a quick pre-pass).
     """
 
     rosout: bool = False
     diagnostics_topics: tuple[str, ...] = ("/diagnostics",)
     extra_topics: tuple[str, ...] = ()
+    only_roles: frozenset[Role] | None = None
 
     def classify(self, topic: str, msgtype: str) -> tuple[Role | None, str | None]:
         """The role of a topic, or why a topic named like a role's input is not read.
@@ -74,6 +83,12 @@ class Selection:
             says it is an input but whose type is not the expected one; ``(None, None)`` for
             every other topic.
         """
+        role, reason = self._classify(topic, msgtype)
+        if role is not None and self.only_roles is not None and role not in self.only_roles:
+            return None, None
+        return role, reason
+
+    def _classify(self, topic: str, msgtype: str) -> tuple[Role | None, str | None]:
         if topic in self.extra_topics:
             return "extra", None
         if topic in self.diagnostics_topics:

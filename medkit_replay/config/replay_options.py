@@ -1,0 +1,84 @@
+"""The replay's own options (node ``medkit_replay``) and the bridge nodes' configs.
+
+Each bridge reads its node's parameters with upstream's defaults; errors get file and line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from medkit_replay.bridges.action_status import ActionStatusBridgeConfig
+from medkit_replay.bridges.diagnostic import DiagnosticBridgeConfig
+from medkit_replay.bridges.log import LogBridgeConfig
+from medkit_replay.config.nodes import located, values
+from medkit_replay.errors import ConfigError
+from medkit_replay.parameters import ParameterReader
+
+if TYPE_CHECKING:
+    from medkit_replay.config.params import ParameterSet
+
+_ACTION_SOURCES = "action_sources."
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReplayOptions:
+    """Everything the pipeline needs besides the fault manager's own config.
+
+    Attributes:
+        log_bridge: replay /rosout through the log bridge (on when the config has a
+            ``log_bridge`` section or ``medkit_replay.enable_log_bridge`` is true).
+        action_sources: action name → action server node, the source_id the live action
+            bridge would have found from the graph (a recording holds no node names).
+    """
+
+    log_bridge: bool = False
+    action_sources: dict[str, str] = field(default_factory=dict)
+    diagnostic: DiagnosticBridgeConfig = field(default_factory=DiagnosticBridgeConfig)
+    action_status: ActionStatusBridgeConfig = field(default_factory=ActionStatusBridgeConfig)
+    log: LogBridgeConfig = field(default_factory=LogBridgeConfig)
+
+
+def replay_options(params: ParameterSet) -> tuple[ReplayOptions, list[str]]:
+    """Read ``medkit_replay`` and the three bridge nodes from the merged parameter files."""
+    warnings: list[str] = []
+    own = params.node("medkit_replay")
+
+    def read_own() -> tuple[bool, dict[str, str]]:
+        reader = ParameterReader("medkit_replay", values(own))
+        enabled = reader.boolean("enable_log_bridge", False)
+        sources: dict[str, str] = {}
+        for name in sorted(own):
+            if name.startswith(_ACTION_SOURCES):
+                node = reader.string(name, "")
+                action = name.removeprefix(_ACTION_SOURCES)
+                if not node.startswith("/"):
+                    problem = f"action_sources: {node!r} is not a node name (start it with /)"
+                    raise ConfigError(problem, parameter=name)
+                sources[action if action.startswith("/") else "/" + action] = node
+        return enabled, sources
+
+    log_enabled, action_sources = located(own, read_own)
+    diag_params = params.node("diagnostic_bridge")
+    diagnostic, diag_warnings = located(
+        diag_params, lambda: DiagnosticBridgeConfig.from_parameters(values(diag_params))
+    )
+    action_params = params.node("action_status_bridge")
+    action, action_warnings = located(
+        action_params, lambda: ActionStatusBridgeConfig.from_parameters(values(action_params))
+    )
+    log_params = params.node("log_bridge")
+    log, log_warnings = located(
+        log_params, lambda: LogBridgeConfig.from_parameters(values(log_params))
+    )
+    warnings += diag_warnings + action_warnings + log_warnings
+    return (
+        ReplayOptions(
+            log_bridge=log_enabled or params.mentions("log_bridge"),
+            action_sources=action_sources,
+            diagnostic=diagnostic,
+            action_status=action,
+            log=log,
+        ),
+        warnings,
+    )
