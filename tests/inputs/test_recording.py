@@ -289,8 +289,9 @@ def test_input_errors_are_one_line_with_the_path(tmp_path: Path) -> None:
     (tmp_path / "junk.db3").write_text("SQLite? no")
     cases = {
         tmp_path / "missing.mcap": "input not found",
-        tmp_path
-        / "notes.txt": "unsupported input (expected a rosbag2 directory or a .db3, .mcap file)",
+        tmp_path / "notes.txt": (
+            "unsupported input (expected a rosbag2 directory or a .db3, .jsonl, .mcap file)"
+        ),
         tmp_path / "empty": "no metadata.yaml and no .mcap or .db3 file in it",
         tmp_path / "junk.mcap": "not an MCAP file (bad magic)",
         tmp_path / "junk.db3": "not an SQLite database",
