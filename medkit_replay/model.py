@@ -125,6 +125,11 @@ class ReportRecord:
     source_id: str
     accepted: bool
     reject_reason: str | None
+    # Beyond the contract: the fault after this report, for counter traces ("how close").
+    status: Status | None = None
+    debounce_counter: int | None = None
+    confirmation_threshold: int | None = None
+    healing_threshold: int | None = None
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

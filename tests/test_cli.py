@@ -67,6 +67,10 @@ def test_json_to_stdout_keeps_stdout_pure(capsys: pytest.CaptureFixture[str]) ->
             "accepted": False,
             "reject_reason": "fault_code contains invalid character ' '. Only alphanumeric, "
             "underscore, hyphen, and dot are allowed",
+            "status": None,
+            "debounce_counter": None,
+            "confirmation_threshold": None,
+            "healing_threshold": None,
         }
     ]
     assert report["muted_faults"] == [

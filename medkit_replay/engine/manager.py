@@ -68,21 +68,8 @@ class FaultManager:
         reason = report_error(
             request.fault_code, request.event_type, request.severity, request.source_id
         )
-        self.output.reports.append(
-            ReportRecord(
-                t_ns=request.t_ns,
-                origin=request.origin,
-                topic=request.topic,
-                fault_code=request.fault_code,
-                event_type=_EVENT_NAMES.get(request.event_type, str(request.event_type)),
-                severity=request.severity,
-                description=request.description,
-                source_id=request.source_id,
-                accepted=reason is None,
-                reject_reason=reason,
-            )
-        )
         if reason is not None:
+            self._report_record(request, reason, None, None)
             return False
         config = sanitize(self.resolver.resolve(request.source_id))
         outcome = self.storage.report(
@@ -94,6 +81,7 @@ class FaultManager:
             request.t_ns,
             config,
         )
+        self._report_record(request, None, self.storage.faults.get(request.fault_code), config)
         fault = self.storage.faults.get(request.fault_code)
         if fault is None:
             return True  # PASSED for an unknown fault: accepted, nothing stored
@@ -237,6 +225,32 @@ class FaultManager:
         self.output.events.append(
             FaultEvent(
                 t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto
+            )
+        )
+
+    def _report_record(
+        self,
+        request: ReportRequest,
+        reason: str | None,
+        fault: FaultRecord | None,
+        config: DebounceConfig | None,
+    ) -> None:
+        self.output.reports.append(
+            ReportRecord(
+                t_ns=request.t_ns,
+                origin=request.origin,
+                topic=request.topic,
+                fault_code=request.fault_code,
+                event_type=_EVENT_NAMES.get(request.event_type, str(request.event_type)),
+                severity=request.severity,
+                description=request.description,
+                source_id=request.source_id,
+                accepted=reason is None,
+                reject_reason=reason,
+                status=fault.status if fault is not None else None,
+                debounce_counter=fault.counter if fault is not None else None,
+                confirmation_threshold=config.confirmation_threshold if config else None,
+                healing_threshold=config.healing_threshold if config else None,
             )
         )
 

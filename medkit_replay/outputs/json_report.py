@@ -83,6 +83,10 @@ def report_dict(report: ReportRecord) -> JsonObject:
         "source_id": report.source_id,
         "accepted": report.accepted,
         "reject_reason": report.reject_reason,
+        "status": report.status,
+        "debounce_counter": report.debounce_counter,
+        "confirmation_threshold": report.confirmation_threshold,
+        "healing_threshold": report.healing_threshold,
     }
 
 

@@ -63,6 +63,10 @@ TABLE_COLUMNS: dict[str, list[str]] = {
         "source_id",
         "accepted",
         "reject_reason",
+        "status",
+        "debounce_counter",
+        "confirmation_threshold",
+        "healing_threshold",
     ],
     "clears": [
         "t_ns",
