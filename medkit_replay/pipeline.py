@@ -13,6 +13,7 @@ from medkit_replay.bridges.action_status import ActionStatusBridge
 from medkit_replay.bridges.diagnostic import DiagnosticBridge
 from medkit_replay.bridges.log import LogBridge
 from medkit_replay.bridges.service_calls import ServiceCallReplayer
+from medkit_replay.config.effective import effective_config
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import ReplayOptions, replay_options
@@ -168,6 +169,7 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
                 "medkit_replay.action_sources to "
                 + ", ".join(f"{a}: {n}" for a, n in suggestion.items())
             )
+    config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
     return _result(
         manager,
         timeline,
@@ -177,6 +179,7 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
         warnings,
         parity,
         (events, transitions, reports, clears),
+        config,
     )
 
 
@@ -189,6 +192,7 @@ def _result(
     warnings: list[str],
     parity: dict[str, object] | None,
     logs: tuple[Spool[FaultEvent], Spool[Transition], Spool[ReportRecord], Spool[ClearRecord]],
+    config: dict[str, object],
 ) -> Result:
     events, transitions, reports, clears = logs
     faults = manager.faults()
@@ -233,4 +237,5 @@ def _result(
         parity=parity,
         warnings=tuple(warnings + output.warnings),
         summary=summary,
+        config=config,
     )
