@@ -58,6 +58,7 @@ class _Call:
     kind: str
     fault_code: str
     applied: bool
+    responded: bool = False
 
 
 class ServiceCallReplayer:
@@ -145,13 +146,9 @@ class ServiceCallReplayer:
     def _response(
         self, t_ns: int, topic: str, kind: str, call: _Call | None, payload: object
     ) -> None:
-        if call is None or not call.applied or call.kind != kind:
-            return
-        if any(
-            r.topic == topic and r.t_ns == t_ns and r.fault_code == call.fault_code
-            for r in self.responses[-4:]
-        ):
-            return  # the other side's copy of the same response
+        if call is None or not call.applied or call.kind != kind or call.responded:
+            return  # unknown call, or the other side's copy of a response already kept
+        call.responded = True
         accepted = bool(getattr(payload, "accepted", getattr(payload, "success", False)))
         codes = getattr(payload, "auto_cleared_codes", ())
         self.responses.append(
