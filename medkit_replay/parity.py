@@ -13,8 +13,9 @@ if TYPE_CHECKING:
     from collections.abc import Iterable
 
     from medkit_replay.bridges.action_status import ActionStatusBridge
+    from medkit_replay.bridges.service_calls import RecordedResponse
     from medkit_replay.config.replay_options import ReplayOptions
-    from medkit_replay.model import FaultEvent
+    from medkit_replay.model import ClearRecord, FaultEvent, ReportRecord
 
 MAX_LISTED = 200
 
@@ -162,3 +163,48 @@ def suggest_action_sources(
         if len(others) == 1:
             suggestion[action] = next(iter(others))
     return suggestion
+
+
+def compare_responses(
+    responses: Iterable[RecordedResponse],
+    reports: Iterable[ReportRecord],
+    clears: Iterable[ClearRecord],
+) -> dict[str, object]:
+    """Recorded service responses against the replay's verdict on the same calls.
+
+    ReportFault ``accepted`` and ClearFault ``success``/``auto_cleared_codes`` are compared
+    for each recorded call the replay applied (matched on request time, topic and code).
+    """
+    recorded = list(responses)
+    wanted = {(r.request_t_ns, r.fault_code) for r in recorded}
+    accepted = {
+        (r.t_ns, r.fault_code): r.accepted
+        for r in reports
+        if r.origin == "report_fault" and (r.t_ns, r.fault_code) in wanted
+    }
+    cleared = {(c.t_ns, c.fault_code): c for c in clears if (c.t_ns, c.fault_code) in wanted}
+    disagree: list[dict[str, object]] = []
+    for response in recorded:
+        key = (response.request_t_ns, response.fault_code)
+        if response.kind == "report":
+            ours: object = accepted.get(key)
+            theirs: object = response.accepted
+        else:
+            clear = cleared.get(key)
+            ours = None if clear is None else [clear.success, list(clear.auto_cleared_codes)]
+            theirs = [response.accepted, list(response.auto_cleared_codes)]
+        if ours != theirs:
+            disagree.append(
+                {
+                    "kind": response.kind,
+                    "fault_code": response.fault_code,
+                    "t_ns": response.request_t_ns,
+                    "recorded": theirs,
+                    "replayed": ours,
+                }
+            )
+    return {
+        "recorded_responses": len(recorded),
+        "agree": len(recorded) - len(disagree),
+        "disagree": disagree[:MAX_LISTED],
+    }

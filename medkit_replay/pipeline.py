@@ -31,7 +31,13 @@ from medkit_replay.model import (
     ReportRequest,
     Transition,
 )
-from medkit_replay.parity import RecordedEvent, compare, recorded_event, suggest_action_sources
+from medkit_replay.parity import (
+    RecordedEvent,
+    compare,
+    compare_responses,
+    recorded_event,
+    suggest_action_sources,
+)
 from medkit_replay.result import EVENT_KINDS, STATUSES, Result, Summary
 from medkit_replay.spool import Spool
 from medkit_replay.version import __version__
@@ -158,7 +164,7 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
             + (", /rosout" if rosout else "")
             + "); the report is empty"
         )
-    parity = None
+    parity: dict[str, object] | None = None
     if len(router.recorded_events):
         parity = compare(router.recorded_events, events)
         suggestion = suggest_action_sources(router.recorded_events, router.action, options)
@@ -169,6 +175,9 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
                 "medkit_replay.action_sources to "
                 + ", ".join(f"{a}: {n}" for a, n in suggestion.items())
             )
+    if router.services.responses:
+        parity = parity if parity is not None else {}
+        parity["service_responses"] = compare_responses(router.services.responses, reports, clears)
     config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
     return _result(
         manager,

@@ -45,6 +45,7 @@ class RecordedResponse:
     """What the live fault manager answered to one recorded call."""
 
     t_ns: int
+    request_t_ns: int
     topic: str
     fault_code: str
     kind: str  # "report" or "clear"
@@ -58,6 +59,7 @@ class _Call:
     kind: str
     fault_code: str
     applied: bool
+    t_ns: int = 0
     responded: bool = False
 
 
@@ -107,7 +109,7 @@ class ServiceCallReplayer:
             if call is not None and not call.applied and not call.fault_code:
                 # A payload after a metadata-only copy of the same call: it counts after all.
                 self.metadata_only[topic] -= 1
-            self._remember(key, _Call(kind, request.fault_code, applied=True))
+            self._remember(key, _Call(kind, request.fault_code, applied=True, t_ns=t_ns))
             return [request]
         if info.event_type in (RESPONSE_SENT, RESPONSE_RECEIVED) and msg.response:
             self._response(t_ns, topic, kind, call, msg.response[0])
@@ -154,6 +156,7 @@ class ServiceCallReplayer:
         self.responses.append(
             RecordedResponse(
                 t_ns=t_ns,
+                request_t_ns=call.t_ns,
                 topic=topic,
                 fault_code=call.fault_code,
                 kind=kind,
