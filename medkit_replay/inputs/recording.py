@@ -62,6 +62,27 @@ class Recording:
         return (merged.item for merged in merge([i.messages() for i in self._inputs]))
 
     @property
+    def span(self) -> tuple[int, int] | None:
+        """First and last log time (ns) of the whole recording, as known before reading.
+
+        Taken from what the inputs declare when opened (an MCAP summary, a ``.db3``'s index),
+        so it costs nothing and covers every topic, read or not. None when any input does not
+        declare its span up front (a script, an MCAP file without a summary): a partial span
+        would be wrong about the recording's end. Informational only (progress, ETA).
+        """
+        starts: list[int] = []
+        ends: list[int] = []
+        for opened in self._inputs:
+            summary = opened.summary()
+            if summary.start_ns is None or summary.end_ns is None:
+                return None
+            starts.append(summary.start_ns)
+            ends.append(summary.end_ns)
+        if not starts:
+            return None
+        return min(starts), max(ends)
+
+    @property
     def inputs(self) -> tuple[InputSummary, ...]:
         """One summary per input, in input order; final once :meth:`messages` is exhausted."""
         return tuple(i.summary() for i in self._inputs)
@@ -87,6 +108,7 @@ def open_recording(
     paths: Iterable[str | Path],
     *,
     rosout: bool = False,
+    rosout_topic: str = "/rosout",
     diagnostics_topics: Iterable[str] = ("/diagnostics",),
     extra_topics: Iterable[str] = (),
     only_roles: Iterable[Role] | None = None,
@@ -109,6 +131,7 @@ def open_recording(
     """
     selection = Selection(
         rosout=rosout,
+        rosout_topic=rosout_topic,
         diagnostics_topics=tuple(diagnostics_topics),
         extra_topics=tuple(extra_topics),
         only_roles=frozenset(only_roles) if only_roles is not None else None,

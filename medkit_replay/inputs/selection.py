@@ -60,13 +60,15 @@ class Selection:
     """What to read from a recording.
 
     Attributes:
-        rosout: read ``/rosout`` (rcl_interfaces/msg/Log) for the log bridge.
+        rosout: read the log topic (rcl_interfaces/msg/Log) for the log bridge.
+        rosout_topic: the log bridge's ``rosout_topic`` (default ``/rosout``).
         diagnostics_topics: topics read as diagnostics (default ``/diagnostics`` only).
         extra_topics: further topics delivered with role ``extra``, whatever their type.
         only_roles: when set, read only topics of these roles (e.g. a quick pre-pass).
     """
 
     rosout: bool = False
+    rosout_topic: str = "/rosout"
     diagnostics_topics: tuple[str, ...] = ("/diagnostics",)
     extra_topics: tuple[str, ...] = ()
     only_roles: frozenset[Role] | None = None
@@ -93,7 +95,7 @@ class Selection:
             return "extra", None
         if topic in self.diagnostics_topics:
             return _check(topic, msgtype, "diagnostics", DIAGNOSTICS_TYPE)
-        if self.rosout and topic == "/rosout":
+        if self.rosout and topic == self.rosout_topic:
             return _check(topic, msgtype, "rosout", LOG_TYPE)
         for suffix, role, expected in _SUFFIX_ROLES:
             # An action status topic needs an action name before the suffix.
