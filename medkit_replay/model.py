@@ -5,7 +5,7 @@ Neutral ground: every layer may import this module; it imports nothing of ours.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from enum import IntEnum
 from typing import TYPE_CHECKING, Literal, Protocol, TypeVar
 
@@ -18,6 +18,31 @@ Origin = Literal[
 Cause = Literal["report", "auto_confirm", "clear", "auto_clear"]
 EventKind = Literal["fault_confirmed", "fault_updated", "fault_cleared"]
 Status = Literal["PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED"]
+
+_R = TypeVar("_R")
+
+
+def _restore(cls: type[_R], names: tuple[str, ...], values: tuple[object, ...]) -> _R:
+    record = object.__new__(cls)
+    for name, value in zip(names, values, strict=True):
+        object.__setattr__(record, name, value)
+    return record
+
+
+def spoolable(cls: type[_R]) -> type[_R]:
+    """Give a frozen record class a flat pickle form.
+
+    The dataclass default looks its fields up on every object, which dominated the cost of
+    spooling millions of records to disk; this does the lookup once per class.
+    """
+    names = tuple(f.name for f in fields(cls))  # type: ignore[arg-type]  # a dataclass
+
+    def reduce(self: _R) -> tuple[object, ...]:
+        return (_restore, (cls, names, tuple([getattr(self, n) for n in names])))
+
+    cls.__reduce__ = reduce  # type: ignore[method-assign,assignment]
+    return cls
+
 
 NS_PER_SEC = 1_000_000_000
 NS_PER_MS = 1_000_000
@@ -39,6 +64,7 @@ class EventType(IntEnum):
     PASSED = 1
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ReportRequest:
     """A ReportFault request as the fault manager receives it, stamped with bag time.
@@ -57,6 +83,7 @@ class ReportRequest:
     topic: str | None = None
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ClearRequest:
     """A ClearFault request stamped with bag time."""
@@ -71,6 +98,7 @@ class ClearRequest:
 Request = ReportRequest | ClearRequest
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FaultSnapshot:
     """One fault's public state at an instant (ros2_medkit_msgs/Fault plus correlation)."""
@@ -89,6 +117,7 @@ class FaultSnapshot:
     cluster_ids: tuple[str, ...]
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FaultEvent:
     """A FaultEvent the live manager would have published."""
@@ -99,6 +128,7 @@ class FaultEvent:
     auto_cleared_codes: tuple[str, ...] = ()
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Transition:
     """One status change of one fault."""
@@ -111,6 +141,7 @@ class Transition:
     source_id: str | None
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ReportRecord:
     """A ReportFault request that reached the manager, with its verdict."""
@@ -132,6 +163,7 @@ class ReportRecord:
     healing_threshold: int | None = None
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ClearRecord:
     """A ClearFault request with the response the manager would have sent."""
@@ -170,6 +202,7 @@ class Cluster:
     last_at_ns: int
 
 
+@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
 class NearMiss:
     """A FAILED report after which the fault was not CONFIRMED."""
@@ -240,3 +273,6 @@ class EngineOutput:
     clears: RecordLog[ClearRecord] = field(default_factory=list)
     retroactive_mutes: list[RetroactiveMute] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    # Running counts, so that a summary never has to read spooled records back.
+    event_counts: dict[str, int] = field(default_factory=dict)
+    reports_accepted: int = 0

@@ -222,6 +222,7 @@ class FaultManager:
     def _event(
         self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
     ) -> None:
+        self.output.event_counts[kind] = self.output.event_counts.get(kind, 0) + 1
         self.output.events.append(
             FaultEvent(
                 t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto
@@ -235,6 +236,8 @@ class FaultManager:
         fault: FaultRecord | None,
         config: DebounceConfig | None,
     ) -> None:
+        if reason is None:
+            self.output.reports_accepted += 1
         self.output.reports.append(
             ReportRecord(
                 t_ns=request.t_ns,
