@@ -36,4 +36,4 @@ def test_report_from_spilled_records_is_byte_identical(monkeypatch: pytest.Monke
     monkeypatch.setattr(spool, "DEFAULT_CHUNK", 2)
     result = replay(*args)
     assert dumps(result) == in_memory
-    assert dumps(result) == json.dumps(to_report(result), indent=2, ensure_ascii=True) + "\n"
+    assert json.loads(dumps(result)) == to_report(result)
