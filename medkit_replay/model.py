@@ -161,6 +161,7 @@ class ReportRecord:
     debounce_counter: int | None = None
     confirmation_threshold: int | None = None
     healing_threshold: int | None = None
+    withheld_event: EventKind | None = None  # the event correlation muting suppressed
 
 
 @spoolable

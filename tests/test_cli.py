@@ -71,6 +71,7 @@ def test_json_to_stdout_keeps_stdout_pure(capsys: pytest.CaptureFixture[str]) ->
             "debounce_counter": None,
             "confirmation_threshold": None,
             "healing_threshold": None,
+            "withheld_event": None,
         }
     ]
     assert report["muted_faults"] == [

@@ -81,9 +81,9 @@ class FaultManager:
             request.t_ns,
             config,
         )
-        self._report_record(request, None, self.storage.faults.get(request.fault_code), config)
         fault = self.storage.faults.get(request.fault_code)
         if fault is None:
+            self._report_record(request, None, None, config)
             return True  # PASSED for an unknown fault: accepted, nothing stored
         after = outcome.after
         if outcome.before != after and after is not None:
@@ -111,6 +111,7 @@ class FaultManager:
                 if not outcome.is_new and outcome.before == "CONFIRMED"
                 else "fault_confirmed"
             )
+        self._report_record(request, None, fault, config, withheld=kind if muted else None)
         if kind is not None and not muted:
             self._event(request.t_ns, kind, fault)
         if not outcome.is_new and outcome.before != "HEALED" and after == "HEALED":
@@ -235,6 +236,8 @@ class FaultManager:
         reason: str | None,
         fault: FaultRecord | None,
         config: DebounceConfig | None,
+        *,
+        withheld: EventKind | None = None,
     ) -> None:
         if reason is None:
             self.output.reports_accepted += 1
@@ -254,6 +257,7 @@ class FaultManager:
                 debounce_counter=fault.counter if fault is not None else None,
                 confirmation_threshold=config.confirmation_threshold if config else None,
                 healing_threshold=config.healing_threshold if config else None,
+                withheld_event=withheld,
             )
         )
 

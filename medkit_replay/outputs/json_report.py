@@ -87,6 +87,7 @@ def report_dict(report: ReportRecord) -> JsonObject:
         "debounce_counter": report.debounce_counter,
         "confirmation_threshold": report.confirmation_threshold,
         "healing_threshold": report.healing_threshold,
+        "withheld_event": report.withheld_event,
     }
 
 

@@ -67,6 +67,7 @@ TABLE_COLUMNS: dict[str, list[str]] = {
         "debounce_counter",
         "confirmation_threshold",
         "healing_threshold",
+        "withheld_event",
     ],
     "clears": [
         "t_ns",
