@@ -6,14 +6,18 @@ Thin: the only place errors become one line of text and an exit status.
 from __future__ import annotations
 
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 
 import click
 
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.json_report import write_json
+from medkit_replay.outputs.mcap_events import write_mcap
+from medkit_replay.outputs.parquet import require_pyarrow, write_parquet
+from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.outputs.tables import write_csv
-from medkit_replay.outputs.terminal import echo, render_summary
+from medkit_replay.outputs.terminal import echo, print_summary
 from medkit_replay.pipeline import replay
 from medkit_replay.version import __version__
 
@@ -47,12 +51,28 @@ def cli() -> None:
     default=None,
     help="Write every report table as CSV into this directory.",
 )
-@click.option("--quiet", is_flag=True, help="No human summary.")
+@click.option(
+    "--parquet",
+    "parquet_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
+)
+@click.option(
+    "--mcap",
+    "mcap_out",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write the replayed FaultEvents and status changes as an MCAP recording.",
+)
+@click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
     inputs: tuple[Path, ...],
     configs: tuple[Path, ...],
     json_out: str | None,
     csv_dir: Path | None,
+    parquet_dir: Path | None,
+    mcap_out: Path | None,
     quiet: bool,
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
@@ -61,8 +81,13 @@ def analyze(
     Examples:
       medkit-replay analyze mission/ --config robot_params.yaml --json report.json
       medkit-replay analyze run.jsonl --json - --quiet
+      medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
-    result = replay(list(inputs), list(configs))
+    if parquet_dir is not None:
+        require_pyarrow()  # say so before a long replay, not after it
+    bar = progress_bar(sys.stderr, quiet=quiet)
+    with bar if bar is not None else nullcontext():
+        result = replay(list(inputs), list(configs), progress=bar)
     if json_out == "-":
         write_json(result, sys.stdout)
     elif json_out is not None:
@@ -78,8 +103,22 @@ def analyze(
             raise MedkitReplayError(
                 f"cannot write CSV: {err.strerror}", path=str(csv_dir)
             ) from None
+    if parquet_dir is not None:
+        try:
+            write_parquet(result, parquet_dir)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write Parquet: {err.strerror}", path=str(parquet_dir)
+            ) from None
+    if mcap_out is not None:
+        try:
+            write_mcap(result, mcap_out)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write MCAP: {err.strerror}", path=str(mcap_out)
+            ) from None
     if not quiet:
-        echo(render_summary(result), sys.stderr if json_out == "-" else sys.stdout)
+        print_summary(result, sys.stderr if json_out == "-" else sys.stdout)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -6,8 +6,9 @@ The only place the layers meet (besides the CLI, which calls this).
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 from medkit_replay.bridges.action_status import ActionStatusBridge
 from medkit_replay.bridges.diagnostic import DiagnosticBridge
@@ -43,12 +44,81 @@ from medkit_replay.spool import Spool
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Callable, Iterable, Sequence
 
-    from medkit_replay.inputs import Message
+    from medkit_replay.inputs import Message, Recording
 
 Request = ReportRequest | ClearRequest
 _BRIDGE_ORIGINS = ("diagnostic_bridge", "action_status_bridge", "log_bridge")
+
+PROGRESS_EVERY = 2048
+"""Messages read between two calls of a replay's ``progress`` callback (by default)."""
+
+Phase = Literal["prescan", "replay"]
+"""``prescan``: the pass over recorded ReportFault calls only; ``replay``: the replay itself."""
+
+
+@dataclass(frozen=True, slots=True)
+class Progress:
+    """How far a pass over the recording has got; given to ``replay(progress=...)``.
+
+    Attributes:
+        phase: which pass over the recording this is (see :data:`Phase`).
+        messages: messages read so far in this pass (selected topics only).
+        t_ns: bag time of the last message read (None before the first).
+        start_ns: first log time of the recording, when the inputs declare it up front.
+        end_ns: last log time of the recording, likewise (see ``Recording.span``).
+        done: the pass has read everything (sent once, last, for every pass).
+    """
+
+    phase: Phase
+    messages: int
+    t_ns: int | None
+    start_ns: int | None
+    end_ns: int | None
+    done: bool = False
+
+    @property
+    def fraction(self) -> float | None:
+        """Share of the recording's bag time read, 0.0 to 1.0; None when the span is unknown."""
+        if self.done:
+            return 1.0
+        if self.start_ns is None or self.end_ns is None or self.t_ns is None:
+            return None
+        if self.end_ns <= self.start_ns:
+            return 0.0
+        return min(max((self.t_ns - self.start_ns) / (self.end_ns - self.start_ns), 0.0), 1.0)
+
+
+class _Meter:
+    """Calls a progress callback every ``every`` messages of one pass (cheap to tick)."""
+
+    __slots__ = ("callback", "end_ns", "every", "next_at", "phase", "start_ns")
+
+    def __init__(
+        self,
+        callback: Callable[[Progress], None],
+        phase: Phase,
+        recording: Recording,
+        every: int,
+    ) -> None:
+        self.callback = callback
+        self.phase: Phase = phase
+        span = recording.span
+        self.start_ns: int | None = span[0] if span is not None else None
+        self.end_ns: int | None = span[1] if span is not None else None
+        self.every = max(every, 1)
+        self.next_at = self.every
+        callback(Progress(phase, 0, None, self.start_ns, self.end_ns))
+
+    def tick(self, messages: int, t_ns: int) -> None:
+        """Report; called by the loop when ``messages`` reaches ``next_at``."""
+        self.next_at = messages + self.every
+        self.callback(Progress(self.phase, messages, t_ns, self.start_ns, self.end_ns))
+
+    def finish(self, messages: int, t_ns: int | None) -> None:
+        """Report the end of the pass."""
+        self.callback(Progress(self.phase, messages, t_ns, self.start_ns, self.end_ns, done=True))
 
 
 class _Router:
@@ -82,7 +152,9 @@ class _Router:
         return ()
 
 
-def _recorded_report_codes(inputs: Sequence[Path]) -> set[str]:
+def _recorded_report_codes(
+    inputs: Sequence[Path], progress: Callable[[Progress], None] | None, every: int
+) -> set[str]:
     """Fault codes present in recorded ReportFault traffic (a pre-pass over those topics only)."""
     services = ServiceCallReplayer()
     codes: set[str] = set()
@@ -90,20 +162,42 @@ def _recorded_report_codes(inputs: Sequence[Path]) -> set[str]:
     if not bags:
         return codes
     with open_recording(bags, only_roles=("report_fault",)) as recording:
+        meter = _Meter(progress, "prescan", recording, every) if progress is not None else None
+        next_at = meter.next_at if meter is not None else 0
+        messages = 0
+        last_t: int | None = None
         for message in recording.messages():
+            messages += 1
+            last_t = message.t_ns
+            if messages == next_at and meter is not None:
+                meter.tick(messages, last_t)
+                next_at = meter.next_at
             for request in services.on_message(
                 message.t_ns, message.topic, message.msgtype, message.msg
             ):
                 codes.add(request.fault_code)
+        if meter is not None:
+            meter.finish(messages, last_t)
     return codes
 
 
-def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> Result:
+def replay(
+    inputs: Sequence[str | Path],
+    configs: Iterable[str | Path] = (),
+    *,
+    progress: Callable[[Progress], None] | None = None,
+    progress_every: int = PROGRESS_EVERY,
+) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
     Args:
         inputs: rosbag2 directories, ``.mcap`` or ``.db3`` files, JSON-lines scripts.
         configs: ROS 2 parameter files, later ones overriding earlier ones key by key.
+        progress: called with a :class:`Progress` at the start of each pass over the
+            recording, every ``progress_every`` messages read, and once at its end
+            (``done``). Passes: ``prescan`` (recorded ReportFault calls; bags only), then
+            ``replay``. The result does not depend on it; what it raises propagates.
+        progress_every: messages between two calls.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -125,17 +219,27 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
     manager = FaultManager(manager_config, output)
     timeline = Timeline(manager)
     router = _Router(options)
-    recorded_codes = _recorded_report_codes(paths)
+    recorded_codes = _recorded_report_codes(paths, progress, progress_every)
     withheld: Counter[str] = Counter()
     withheld_codes: dict[str, set[str]] = {}
     rosout = router.log is not None
-    extra = (router.log.topic,) if router.log is not None and router.log.topic != "/rosout" else ()
+    rosout_topic = router.log.topic if router.log is not None else "/rosout"
     messages = 0
     with open_recording(
-        paths, rosout=rosout, diagnostics_topics=(router.diagnostic.topic,), extra_topics=extra
+        paths,
+        rosout=rosout,
+        diagnostics_topics=(router.diagnostic.topic,),
+        rosout_topic=rosout_topic,
     ) as recording:
+        meter = (
+            _Meter(progress, "replay", recording, progress_every) if progress is not None else None
+        )
+        next_at = meter.next_at if meter is not None else 0  # 0: never reached
         for message in recording.messages():
             messages += 1
+            if messages == next_at and meter is not None:
+                meter.tick(messages, message.t_ns)
+                next_at = meter.next_at
             timeline.advance(message.t_ns)
             for request in router.requests(message):
                 if request.origin in _BRIDGE_ORIGINS and request.fault_code in recorded_codes:
@@ -145,6 +249,8 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
                 timeline.apply(request)
         warnings += recording.warnings
         summaries = recording.inputs
+        if meter is not None:
+            meter.finish(messages, timeline.last_ns)
     for origin, count in sorted(withheld.items()):
         warnings.append(
             f"double counting avoided: {count} request(s) of the simulated {origin} for "
@@ -159,10 +265,9 @@ def replay(inputs: Sequence[str | Path], configs: Iterable[str | Path] = ()) -> 
             )
     if messages == 0:
         warnings.append(
-            "no topic the replay reads was found (action status, /diagnostics, ReportFault/"
-            "ClearFault service events, fault manager events"
-            + (", /rosout" if rosout else "")
-            + "); the report is empty"
+            "no topic the replay reads was found (action status, "
+            f"{router.diagnostic.topic}, ReportFault/ClearFault service events, fault manager "
+            "events" + (f", {rosout_topic}" if rosout else "") + "); the report is empty"
         )
     parity: dict[str, object] | None = None
     if len(router.recorded_events):
@@ -214,10 +319,8 @@ def _result(
     by_status = dict.fromkeys(STATUSES, 0)
     for fault in faults:
         by_status[fault.status] += 1
-    by_event = dict.fromkeys(EVENT_KINDS, 0)
-    for event in events:
-        by_event[event.event_type] += 1
-    accepted = sum(1 for r in reports if r.accepted)
+    by_event = {kind: output.event_counts.get(kind, 0) for kind in EVENT_KINDS}
+    accepted = output.reports_accepted
     summary = Summary(
         messages_read=messages,
         reports=len(reports),

@@ -1,0 +1,224 @@
+"""An MCAP recording of what the replayed fault manager published, to view beside the robot's bag.
+
+Two topics, each message stamped with the bag time of the change (log time = publish time):
+
+- ``/fault_manager/events``: ``ros2_medkit_msgs/msg/FaultEvent``, exactly the events the live
+  manager would have published (``timestamp`` = bag time; the fault's times likewise);
+- ``/medkit_replay/transitions``: ``medkit_replay_msgs/msg/FaultTransition``, every status change
+  (also the silent ones, e.g. auto-confirmation), a small message type of medkit-replay's own.
+
+The file is a rosbag2 MCAP (profile ``ros2``, CDR, schemas as ``ros2msg`` text with their
+dependencies appended in rosbag2's ``====`` / ``MSG:`` layout), so Foxglove, rosbags, the ``mcap``
+tools and medkit-replay itself read it without any ROS package installed. Same result, same bytes.
+"""
+
+from __future__ import annotations
+
+import heapq
+from functools import cache
+from importlib import resources
+from typing import TYPE_CHECKING, BinaryIO, Protocol, cast
+
+from mcap.writer import CompressionType, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from medkit_replay.inputs.typestore import MEDKIT_PACKAGE, Definition, types_from_definition
+from medkit_replay.model import NS_PER_SEC
+from medkit_replay.version import __version__
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+    from pathlib import Path
+
+    from rosbags.typesys.store import MsgType, Typestore
+
+    from medkit_replay.model import FaultEvent, FaultSnapshot, Transition
+    from medkit_replay.result import Result
+
+EVENTS_TOPIC = "/fault_manager/events"
+FAULT_EVENT_TYPE = f"{MEDKIT_PACKAGE}/msg/FaultEvent"
+TRANSITIONS_TOPIC = "/medkit_replay/transitions"
+TRANSITION_TYPE = "medkit_replay_msgs/msg/FaultTransition"
+
+TIME_MSG = """\
+# builtin_interfaces/msg/Time: ROS time, seconds and nanoseconds.
+int32 sec
+uint32 nanosec
+"""
+
+TRANSITION_MSG = """\
+# A status change of one fault, as medkit-replay found it (not an upstream ros2_medkit message).
+# Published on /medkit_replay/transitions at the bag time of the change.
+string CAUSE_REPORT = "report"
+string CAUSE_AUTO_CONFIRM = "auto_confirm"
+string CAUSE_CLEAR = "clear"
+string CAUSE_AUTO_CLEAR = "auto_clear"
+
+# Bag time of the change.
+builtin_interfaces/Time stamp
+string fault_code
+# Status before the change; empty when the change created the fault.
+string from_status
+# PREFAILED, PREPASSED, CONFIRMED, HEALED or CLEARED.
+string to_status
+# One of the CAUSE_ constants.
+string cause
+# The reporting source of the request that caused it; empty unless cause is "report".
+string source_id
+"""
+
+DEFAULT_QOS = """\
+- history: keep_last
+  depth: 10
+  reliability: reliable
+  durability: volatile
+  deadline:
+    sec: 9223372036
+    nsec: 854775807
+  lifespan:
+    sec: 9223372036
+    nsec: 854775807
+  liveliness: automatic
+  liveliness_lease_duration:
+    sec: 9223372036
+    nsec: 854775807
+  avoid_ros_namespace_conventions: false
+"""
+"""rclcpp's default QoS, offered on both topics (rosbag2's ``offered_qos_profiles`` layout)."""
+
+_RULE = "=" * 80
+
+
+class _McapWriter(Protocol):
+    """The part of ``mcap.writer.Writer`` used here, typed (the library leaves it untyped)."""
+
+    def start(self, profile: str, library: str) -> None: ...
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int: ...
+    def register_channel(
+        self, topic: str, message_encoding: str, schema_id: int, metadata: dict[str, str]
+    ) -> int: ...
+    def add_message(
+        self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int
+    ) -> None: ...
+    def finish(self) -> None: ...
+
+
+def _bundled(name: str) -> str:
+    root = resources.files("medkit_replay.inputs").joinpath("interfaces").joinpath(MEDKIT_PACKAGE)
+    return root.joinpath("msg").joinpath(f"{name}.msg").read_text(encoding="utf-8")
+
+
+def _concatenated(text: str, dependencies: list[tuple[str, str]]) -> str:
+    """A definition with its dependencies appended as rosbag2 stores it (``MSG: pkg/Name``)."""
+    parts = [text.rstrip("\n")]
+    for name, body in dependencies:
+        parts.append(f"{_RULE}\nMSG: {name}\n{body.rstrip(chr(10))}")
+    return "\n".join(parts) + "\n"
+
+
+@cache
+def schemas() -> dict[str, str]:
+    """The ``ros2msg`` schema text embedded for each type written, dependencies included."""
+    time = ("builtin_interfaces/Time", TIME_MSG)
+    return {
+        FAULT_EVENT_TYPE: _concatenated(
+            _bundled("FaultEvent"), [(f"{MEDKIT_PACKAGE}/Fault", _bundled("Fault")), time]
+        ),
+        TRANSITION_TYPE: _concatenated(TRANSITION_MSG, [time]),
+    }
+
+
+@cache
+def message_store() -> Typestore:
+    """A typestore built from exactly the schema text embedded, so data and schema agree."""
+    store = get_typestore(Stores.EMPTY)
+    for name, text in schemas().items():
+        store.register(types_from_definition(name, Definition("ros2msg", text)))
+    return store
+
+
+def _time(store: Typestore, t_ns: int) -> MsgType:
+    sec, nanosec = divmod(t_ns, NS_PER_SEC)
+    return store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+
+
+def _fault(store: Typestore, fault: FaultSnapshot) -> MsgType:
+    return store.types[f"{MEDKIT_PACKAGE}/msg/Fault"](
+        fault_code=fault.fault_code,
+        severity=fault.severity,
+        description=fault.description,
+        first_occurred=_time(store, fault.first_occurred_ns),
+        last_occurred=_time(store, fault.last_occurred_ns),
+        last_passed=_time(store, fault.last_passed_ns),
+        occurrence_count=fault.occurrence_count,
+        status=fault.status,
+        reporting_sources=list(fault.reporting_sources),
+    )
+
+
+def fault_event_cdr(event: FaultEvent) -> bytes:
+    """One replayed FaultEvent as the CDR payload the live manager would have published."""
+    store = message_store()
+    message = store.types[FAULT_EVENT_TYPE](
+        event_type=event.event_type,
+        fault=_fault(store, event.fault),
+        timestamp=_time(store, event.t_ns),
+        auto_cleared_codes=list(event.auto_cleared_codes),
+    )
+    return bytes(store.serialize_cdr(message, FAULT_EVENT_TYPE))
+
+
+def transition_cdr(transition: Transition) -> bytes:
+    """One status change as a ``medkit_replay_msgs/msg/FaultTransition`` CDR payload."""
+    store = message_store()
+    message = store.types[TRANSITION_TYPE](
+        stamp=_time(store, transition.t_ns),
+        fault_code=transition.fault_code,
+        from_status=transition.from_status or "",
+        to_status=transition.to_status,
+        cause=transition.cause,
+        source_id=transition.source_id or "",
+    )
+    return bytes(store.serialize_cdr(message, TRANSITION_TYPE))
+
+
+def _timeline(result: Result) -> Iterator[tuple[int, int, str, bytes]]:
+    """(t_ns, order, topic, payload) in bag-time order; a change before the event it caused."""
+    transitions = ((t.t_ns, 0, TRANSITIONS_TOPIC, t) for t in result.transitions)
+    events = ((e.t_ns, 1, EVENTS_TOPIC, e) for e in result.events)
+    for t_ns, order, topic, item in heapq.merge(transitions, events, key=lambda x: x[:2]):
+        if topic == EVENTS_TOPIC:
+            yield t_ns, order, topic, fault_event_cdr(cast("FaultEvent", item))
+        else:
+            yield t_ns, order, topic, transition_cdr(cast("Transition", item))
+
+
+def write_mcap_stream(result: Result, stream: BinaryIO) -> dict[str, int]:
+    """Write the MCAP to an open binary stream; returns the messages written per topic."""
+    writer = cast("_McapWriter", Writer(stream, compression=CompressionType.ZSTD))
+    writer.start(profile="ros2", library=f"medkit-replay {__version__}")
+    channels: dict[str, int] = {}
+    for topic, msgtype in ((EVENTS_TOPIC, FAULT_EVENT_TYPE), (TRANSITIONS_TOPIC, TRANSITION_TYPE)):
+        schema = writer.register_schema(msgtype, "ros2msg", schemas()[msgtype].encode("utf-8"))
+        channels[topic] = writer.register_channel(
+            topic, "cdr", schema, {"offered_qos_profiles": DEFAULT_QOS}
+        )
+    counts = dict.fromkeys(channels, 0)
+    for t_ns, _, topic, payload in _timeline(result):
+        counts[topic] += 1
+        writer.add_message(channels[topic], t_ns, payload, t_ns, counts[topic])
+    writer.finish()
+    return counts
+
+
+def write_mcap(result: Result, path: Path) -> dict[str, int]:
+    """Write the replayed FaultEvents and status changes to an MCAP file at ``path``.
+
+    Returns:
+        Messages written per topic.
+
+    Raises:
+        OSError: the file cannot be written.
+    """
+    with path.open("wb") as stream:
+        return write_mcap_stream(result, stream)
