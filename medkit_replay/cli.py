@@ -13,10 +13,7 @@ import click
 
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.json_report import write_json
-from medkit_replay.outputs.mcap_events import write_mcap
-from medkit_replay.outputs.parquet import require_pyarrow, write_parquet
 from medkit_replay.outputs.progress import progress_bar
-from medkit_replay.outputs.tables import write_csv
 from medkit_replay.outputs.terminal import echo, print_summary
 from medkit_replay.pipeline import replay
 from medkit_replay.version import __version__
@@ -84,6 +81,8 @@ def analyze(
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
     if parquet_dir is not None:
+        from medkit_replay.outputs.parquet import require_pyarrow  # noqa: PLC0415  # pandas
+
         require_pyarrow()  # say so before a long replay, not after it
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
@@ -98,6 +97,8 @@ def analyze(
             raise MedkitReplayError(f"cannot write report: {err.strerror}", path=json_out) from None
     if csv_dir is not None:
         try:
+            from medkit_replay.outputs.tables import write_csv  # noqa: PLC0415  # pandas
+
             write_csv(result, csv_dir)
         except OSError as err:
             raise MedkitReplayError(
@@ -105,6 +106,8 @@ def analyze(
             ) from None
     if parquet_dir is not None:
         try:
+            from medkit_replay.outputs.parquet import write_parquet  # noqa: PLC0415
+
             write_parquet(result, parquet_dir)
         except OSError as err:
             raise MedkitReplayError(
@@ -112,6 +115,8 @@ def analyze(
             ) from None
     if mcap_out is not None:
         try:
+            from medkit_replay.outputs.mcap_events import write_mcap  # noqa: PLC0415
+
             write_mcap(result, mcap_out)
         except OSError as err:
             raise MedkitReplayError(
