@@ -41,7 +41,7 @@ def test_compressed_chunks(tmp_path: Path, compression: CompressionType) -> None
         for i in range(20):
             t_ns = 1_000_000_000 + i * 100_000_000
             writer.add_message(channel, t_ns, diagnostics(t_ns, i % 3), t_ns, sequence=i)
-        writer.finish()
+        writer.finish()  # type: ignore[no-untyped-call]  # mcap ships it untyped
     with open_recording([path]) as recording:
         messages = list(recording.messages())
         warnings = recording.warnings
