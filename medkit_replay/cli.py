@@ -129,7 +129,7 @@ def analyze(
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit status."""
     try:
-        cli.main(args=argv, prog_name="medkit-replay", standalone_mode=False)
+        status = cli.main(args=argv, prog_name="medkit-replay", standalone_mode=False)
     except MedkitReplayError as err:
         echo(f"medkit-replay: error: {err.render()}\n", sys.stderr)
         return err.exit_code
@@ -145,7 +145,11 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr,
         )
         return 2
-    return 0
+    # A command that ends with ctx.exit(n) (a failed check: 1) hands its status back here.
+    return status if isinstance(status, int) else 0
+
+
+# Subcommands beyond analyze live in medkit_replay/commands/, one module each; register here.
 
 
 if __name__ == "__main__":
