@@ -11,6 +11,9 @@ from pathlib import Path
 
 import click
 
+from medkit_replay.commands.check import check
+from medkit_replay.commands.diff import diff
+from medkit_replay.commands.fleet import fleet
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.json_report import write_json
 from medkit_replay.outputs.progress import progress_bar
@@ -150,6 +153,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 # Subcommands beyond analyze live in medkit_replay/commands/, one module each; register here.
+cli.add_command(check)
+cli.add_command(diff)
+cli.add_command(fleet)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,23 @@
+"""Fault budgets: the budget file (model and strict parser) and the verdicts on a replay's Result.
+
+``budget`` reads a budget YAML into plain values; ``evaluate`` turns a Result and a budget into
+one Verdict per rule; ``terminal``, ``junit`` and ``github`` write verdicts out. The format is
+documented in docs/budgets.md; ``budget.schema.json`` beside this file is its JSON Schema.
+"""
+
+from __future__ import annotations
+
+from medkit_replay.checks.budget import Budget, Rule, load_budget, parse_budget
+from medkit_replay.checks.evaluate import CheckRun, Offender, Verdict, check_run, evaluate
+
+__all__ = [
+    "Budget",
+    "CheckRun",
+    "Offender",
+    "Rule",
+    "Verdict",
+    "check_run",
+    "evaluate",
+    "load_budget",
+    "parse_budget",
+]

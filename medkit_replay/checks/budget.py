@@ -1,0 +1,566 @@
+"""The fault budget file (``version: 1``): its model and a strict parser with file:line errors.
+
+A budget is a list of rules, each a YAML mapping with one rule kind and an optional ``name``.
+The format is documented in docs/budgets.md; ``budget.schema.json`` beside this module is the
+same format as a JSON Schema (editor completion). Unknown keys, wrong types and out-of-range
+values are ConfigErrors naming the file and line (exit 2).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
+
+import yaml
+from yaml.constructor import ConstructorError, SafeConstructor
+
+from medkit_replay.errors import ConfigError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+BUDGET_VERSION = 1
+"""The only budget format version this release reads."""
+
+SCHEMA_FILE = Path(__file__).with_name("budget.schema.json")
+"""The budget format as a JSON Schema (draft 2020-12)."""
+
+SEVERITIES = ("INFO", "WARN", "ERROR", "CRITICAL")
+"""Severity names in ros2_medkit_msgs/Fault's order (their index is the severity number)."""
+
+KINDS = (
+    "max_confirmed",
+    "never_confirm",
+    "allow_confirm",
+    "max_occurrences",
+    "max_confirmed_duration_sec",
+    "resolved_by_end",
+    "expect_confirmed",
+    "expect_not_confirmed",
+    "expect_cluster",
+)
+"""Every rule kind, in the order docs/budgets.md describes them."""
+
+_TOP_KEYS = ("version", "name", "rules")
+_INT = "tag:yaml.org,2002:int"
+_FLOAT = "tag:yaml.org,2002:float"
+_STR = "tag:yaml.org,2002:str"
+_BOOL = "tag:yaml.org,2002:bool"
+_NULL = "tag:yaml.org,2002:null"
+_T = TypeVar("_T")
+_MAX_SHOWN = 3
+"""Patterns named in a default rule name before "+N more"."""
+
+
+# -- the model -----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Pattern:
+    """A fault-code glob: ``*`` any run of characters (also none), ``?`` exactly one character.
+
+    Every other character stands for itself (case-sensitive); the whole code must match.
+    """
+
+    text: str
+    regex: re.Pattern[str] = field(compare=False, repr=False)
+
+    @classmethod
+    def of(cls, text: str) -> Pattern:
+        """Compile a glob."""
+        parts = (".*" if c == "*" else "." if c == "?" else re.escape(c) for c in text)
+        return cls(text, re.compile("".join(parts), re.DOTALL))
+
+    def matches(self, code: str) -> bool:
+        """Whether the whole ``code`` matches."""
+        return self.regex.fullmatch(code) is not None
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def matches_any(code: str, patterns: Sequence[Pattern]) -> Pattern | None:
+    """The first pattern matching ``code``, or None."""
+    return next((p for p in patterns if p.matches(code)), None)
+
+
+@dataclass(frozen=True, slots=True)
+class Window:
+    """A closed span of time in seconds from the recording's start: ``[start_sec, end_sec]``."""
+
+    start_sec: float
+    end_sec: float
+
+    def holds(self, offset_ns: int) -> bool:
+        """Whether an offset from the recording's start (ns) lies in the window (ends included)."""
+        return round(self.start_sec * 1e9) <= offset_ns <= round(self.end_sec * 1e9)
+
+    def __str__(self) -> str:
+        return f"between {seconds_text(self.start_sec)} and {seconds_text(self.end_sec)} s"
+
+
+@dataclass(frozen=True, slots=True)
+class MaxConfirmed:
+    """At most ``limit`` faults of a severity confirmed during the run; (severity, limit) pairs."""
+
+    limits: tuple[tuple[int, int], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class NeverConfirm:
+    """No fault matching one of the patterns may confirm."""
+
+    patterns: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class AllowConfirm:
+    """Only faults matching one of the patterns may confirm."""
+
+    patterns: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class MaxOccurrences:
+    """A fault matching a pattern may reach at most that ``occurrence_count``."""
+
+    limits: tuple[tuple[Pattern, int], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class MaxConfirmedDuration:
+    """A fault matching a pattern may stay CONFIRMED at most that many seconds at a stretch."""
+
+    limits: tuple[tuple[Pattern, float], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ResolvedByEnd:
+    """A fault matching a pattern that confirmed must be HEALED or CLEARED at the end."""
+
+    patterns: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ExpectConfirmed:
+    """A fault matching ``code`` confirms (within ``between``; muted by ``muted_by``)."""
+
+    code: Pattern
+    between: Window | None = None
+    muted_by: Pattern | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class ExpectNotConfirmed:
+    """No fault matching ``code`` confirms (within ``between``, when given)."""
+
+    code: Pattern
+    between: Window | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class ExpectCluster:
+    """A cluster forms whose rule id matches ``rule`` or whose cluster id matches ``cluster``."""
+
+    rule: Pattern | None = None
+    cluster: Pattern | None = None
+
+
+RuleSpec = (
+    MaxConfirmed
+    | NeverConfirm
+    | AllowConfirm
+    | MaxOccurrences
+    | MaxConfirmedDuration
+    | ResolvedByEnd
+    | ExpectConfirmed
+    | ExpectNotConfirmed
+    | ExpectCluster
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Rule:
+    """One rule of a budget: its name (given or derived), kind, parameters and place."""
+
+    name: str
+    kind: str
+    spec: RuleSpec
+    index: int
+    """1-based position in the budget's ``rules`` list."""
+    line: int | None = None
+    """1-based line of the rule in the budget file."""
+
+
+@dataclass(frozen=True, slots=True)
+class Budget:
+    """A parsed budget file."""
+
+    path: str
+    rules: tuple[Rule, ...]
+    name: str | None = None
+    version: int = BUDGET_VERSION
+
+    @property
+    def title(self) -> str:
+        """The budget's name, else its file name."""
+        return self.name if self.name else Path(self.path).name
+
+
+# -- text helpers shared with the verdicts ---------------------------------------------------
+
+
+def seconds_text(value: float) -> str:
+    """Seconds as written in a budget: ``5``, ``2.5``, ``0.125``."""
+    if value == int(value):
+        return str(int(value))
+    return f"{value:.9f}".rstrip("0").rstrip(".")
+
+
+def severity_text(severity: int) -> str:
+    """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; other numbers as themselves."""
+    return SEVERITIES[severity] if 0 <= severity < len(SEVERITIES) else str(severity)
+
+
+def _listing(items: Sequence[object]) -> str:
+    shown = ", ".join(str(i) for i in items[:_MAX_SHOWN])
+    return shown + (f" +{len(items) - _MAX_SHOWN} more" if len(items) > _MAX_SHOWN else "")
+
+
+def default_name(spec: RuleSpec) -> str:
+    """A rule's name when the budget gives none: what it asks, in a few words."""
+    match spec:
+        case MaxConfirmed(limits=limits):
+            return "most confirmed: " + ", ".join(f"{severity_text(s)} {n}" for s, n in limits)
+        case NeverConfirm(patterns=patterns):
+            return f"never confirmed: {_listing(patterns)}"
+        case AllowConfirm(patterns=patterns):
+            return f"only allowed codes confirm: {_listing(patterns)}"
+        case MaxOccurrences(limits=limits):
+            return "most occurrences: " + _listing([f"{p} {n}" for p, n in limits])
+        case MaxConfirmedDuration(limits=limits):
+            return "longest CONFIRMED: " + _listing([f"{p} {seconds_text(s)} s" for p, s in limits])
+        case ResolvedByEnd(patterns=patterns):
+            return f"healed or cleared by the end: {_listing(patterns)}"
+        case ExpectConfirmed(code=code, between=between, muted_by=muted_by):
+            text = f"{code} confirmed"
+            text += f" {between}" if between is not None else ""
+            return text + (f", muted by {muted_by}" if muted_by is not None else "")
+        case ExpectNotConfirmed(code=code, between=between):
+            return f"{code} not confirmed" + (f" {between}" if between is not None else "")
+        case ExpectCluster(rule=rule, cluster=cluster):
+            return (
+                f"cluster of rule {rule} formed"
+                if rule is not None
+                else f"cluster {cluster} formed"
+            )
+    raise AssertionError(spec)  # pragma: no cover  # every kind is matched above
+
+
+# -- the parser ------------------------------------------------------------------------------
+
+
+class _Reader:
+    """Turns composed YAML nodes into checked values; every error names file and line."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self._constructor = SafeConstructor()
+
+    def fail(self, node: yaml.Node | None, problem: str) -> ConfigError:
+        line = node.start_mark.line + 1 if node is not None else None
+        return ConfigError(problem, path=self.path, line=line)
+
+    def scalar(self, node: yaml.Node, where: str) -> object:
+        if not isinstance(node, yaml.ScalarNode):
+            raise self.fail(node, f"{where}: expected a value, found {_kind(node)}")
+        try:
+            return self._constructor.construct_object(node)
+        except ConstructorError as err:
+            raise self.fail(node, f"{where}: {err.problem}") from None
+
+    def string(self, node: yaml.Node, where: str) -> str:
+        if not (isinstance(node, yaml.ScalarNode) and node.tag == _STR):
+            raise self.fail(node, f"{where}: expected a string, found {_kind(node)}")
+        return str(node.value)
+
+    def pattern(self, node: yaml.Node, where: str) -> Pattern:
+        text = self.string(node, where)
+        if not text:
+            raise self.fail(node, f"{where}: a fault-code pattern must not be empty")
+        return Pattern.of(text)
+
+    def patterns(self, node: yaml.Node, where: str) -> tuple[Pattern, ...]:
+        if not isinstance(node, yaml.SequenceNode):
+            raise self.fail(
+                node, f"{where}: expected a list of fault-code patterns, found {_kind(node)}"
+            )
+        if not node.value:
+            raise self.fail(node, f"{where}: the list of patterns is empty")
+        return tuple(self.pattern(item, f"{where}[{n}]") for n, item in enumerate(node.value))
+
+    def count(self, node: yaml.Node, where: str) -> int:
+        if not (isinstance(node, yaml.ScalarNode) and node.tag == _INT):
+            raise self.fail(node, f"{where}: expected a whole number, found {_kind(node)}")
+        value = self.scalar(node, where)
+        assert isinstance(value, int)
+        if value < 0:
+            raise self.fail(node, f"{where}: must be 0 or more, found {value}")
+        return value
+
+    def seconds(self, node: yaml.Node, where: str) -> float:
+        if not (isinstance(node, yaml.ScalarNode) and node.tag in (_INT, _FLOAT)):
+            raise self.fail(node, f"{where}: expected a number of seconds, found {_kind(node)}")
+        value = self.scalar(node, where)
+        assert isinstance(value, int | float)
+        if not math.isfinite(value) or value < 0:
+            raise self.fail(node, f"{where}: must be a finite number, 0 or more, found {value}")
+        return float(value)
+
+    def mapping(
+        self, node: yaml.Node, where: str, *, allowed: Sequence[str] | None = None
+    ) -> list[tuple[str, yaml.Node, yaml.Node]]:
+        """(key, key node, value node) in file order; keys are strings, unique, and allowed."""
+        if not isinstance(node, yaml.MappingNode):
+            raise self.fail(node, f"{where}: expected a mapping, found {_kind(node)}")
+        items: list[tuple[str, yaml.Node, yaml.Node]] = []
+        seen: set[str] = set()
+        for key_node, value_node in node.value:
+            key = self.string(key_node, f"{where}: key")
+            if key in seen:
+                raise self.fail(key_node, f"{where}: duplicate key '{key}'")
+            if allowed is not None and key not in allowed:
+                raise self.fail(key_node, f"{where}: unknown key '{key}'{_suggest(key, allowed)}")
+            seen.add(key)
+            items.append((key, key_node, value_node))
+        return items
+
+    def window(self, node: yaml.Node, where: str) -> Window:
+        if not (isinstance(node, yaml.SequenceNode) and len(node.value) == 2):
+            raise self.fail(
+                node, f"{where}: expected [FROM, TO], two numbers of seconds from the start"
+            )
+        start = self.seconds(node.value[0], f"{where}[0]")
+        end = self.seconds(node.value[1], f"{where}[1]")
+        if end < start:
+            raise self.fail(
+                node, f"{where}: the window ends ({end:g} s) before it starts ({start:g} s)"
+            )
+        return Window(start, end)
+
+
+def _kind(node: yaml.Node) -> str:
+    if isinstance(node, yaml.MappingNode):
+        return "a mapping"
+    if isinstance(node, yaml.SequenceNode):
+        return "a list"
+    names = {_INT: "a whole number", _FLOAT: "a number", _STR: "a string", _BOOL: "a boolean"}
+    if node.tag == _NULL:
+        return "nothing (null)"
+    shown = repr(node.value) if node.tag == _STR else str(node.value)  # as written
+    return f"{names.get(node.tag, 'a value')} ({shown})"
+
+
+def _suggest(key: str, allowed: Sequence[str]) -> str:
+    folded = [a for a in allowed if a.lower() == key.lower()]
+    close = folded or difflib.get_close_matches(key, allowed, n=1, cutoff=0.6)
+    if close:
+        return f" (did you mean '{close[0]}'?)"
+    return f" (expected one of: {', '.join(allowed)})"
+
+
+def _max_confirmed(reader: _Reader, node: yaml.Node, where: str) -> MaxConfirmed:
+    items = reader.mapping(node, where, allowed=SEVERITIES)
+    if not items:
+        raise reader.fail(node, f"{where}: name at least one severity ({', '.join(SEVERITIES)})")
+    limits = {SEVERITIES.index(k): reader.count(v, f"{where}.{k}") for k, _, v in items}
+    return MaxConfirmed(tuple(sorted(limits.items())))
+
+
+def _limits(
+    reader: _Reader,
+    node: yaml.Node,
+    where: str,
+    value: Callable[[yaml.Node, str], _T],
+) -> tuple[tuple[Pattern, _T], ...]:
+    items = reader.mapping(node, where)
+    if not items:
+        raise reader.fail(node, f"{where}: map at least one fault-code pattern to its limit")
+    limits: list[tuple[Pattern, _T]] = []
+    for key, key_node, value_node in items:
+        if not key:
+            raise reader.fail(key_node, f"{where}: a fault-code pattern must not be empty")
+        limits.append((Pattern.of(key), value(value_node, f"{where}.{key}")))
+    return tuple(limits)
+
+
+def _expect_confirmed(reader: _Reader, node: yaml.Node, where: str) -> ExpectConfirmed:
+    values = {
+        k: v for k, _, v in reader.mapping(node, where, allowed=("code", "between", "muted_by"))
+    }
+    if "code" not in values:
+        raise reader.fail(node, f"{where}: 'code' (the fault-code pattern expected) is required")
+    return ExpectConfirmed(
+        code=reader.pattern(values["code"], f"{where}.code"),
+        between=reader.window(values["between"], f"{where}.between")
+        if "between" in values
+        else None,
+        muted_by=reader.pattern(values["muted_by"], f"{where}.muted_by")
+        if "muted_by" in values
+        else None,
+    )
+
+
+def _expect_not_confirmed(reader: _Reader, node: yaml.Node, where: str) -> ExpectNotConfirmed:
+    values = {k: v for k, _, v in reader.mapping(node, where, allowed=("code", "between"))}
+    if "code" not in values:
+        raise reader.fail(node, f"{where}: 'code' (the fault-code pattern) is required")
+    return ExpectNotConfirmed(
+        code=reader.pattern(values["code"], f"{where}.code"),
+        between=reader.window(values["between"], f"{where}.between")
+        if "between" in values
+        else None,
+    )
+
+
+def _expect_cluster(reader: _Reader, node: yaml.Node, where: str) -> ExpectCluster:
+    values = {k: v for k, _, v in reader.mapping(node, where, allowed=("rule", "cluster"))}
+    if len(values) != 1:
+        raise reader.fail(
+            node,
+            f"{where}: give exactly one of 'rule' (a correlation rule id pattern) or "
+            "'cluster' (a cluster id pattern)",
+        )
+    if "rule" in values:
+        return ExpectCluster(rule=reader.pattern(values["rule"], f"{where}.rule"))
+    return ExpectCluster(cluster=reader.pattern(values["cluster"], f"{where}.cluster"))
+
+
+def _spec(reader: _Reader, kind: str, node: yaml.Node, where: str) -> RuleSpec:
+    where = f"{where}: {kind}"
+    if kind == "max_confirmed":
+        return _max_confirmed(reader, node, where)
+    if kind == "never_confirm":
+        return NeverConfirm(reader.patterns(node, where))
+    if kind == "allow_confirm":
+        return AllowConfirm(reader.patterns(node, where))
+    if kind == "max_occurrences":
+        return MaxOccurrences(_limits(reader, node, where, reader.count))
+    if kind == "max_confirmed_duration_sec":
+        return MaxConfirmedDuration(_limits(reader, node, where, reader.seconds))
+    if kind == "resolved_by_end":
+        return ResolvedByEnd(reader.patterns(node, where))
+    if kind == "expect_confirmed":
+        return _expect_confirmed(reader, node, where)
+    if kind == "expect_not_confirmed":
+        return _expect_not_confirmed(reader, node, where)
+    assert kind == "expect_cluster"
+    return _expect_cluster(reader, node, where)
+
+
+def _rule(reader: _Reader, node: yaml.Node, index: int) -> tuple[Rule, bool]:
+    """One rule and whether its name was given."""
+    where = f"rule {index}"
+    items = reader.mapping(node, where, allowed=("name", *KINDS))
+    kinds = [(k, v) for k, _, v in items if k != "name"]
+    if not kinds:
+        raise reader.fail(node, f"{where}: a rule needs one of: {', '.join(KINDS)}")
+    if len(kinds) > 1:
+        raise reader.fail(
+            node, f"{where}: one kind per rule, found {' and '.join(k for k, _ in kinds)}"
+        )
+    kind, value = kinds[0]
+    spec = _spec(reader, kind, value, where)
+    names = [v for k, _, v in items if k == "name"]
+    name = reader.string(names[0], f"{where}: name").strip() if names else ""
+    if names and not name:
+        raise reader.fail(names[0], f"{where}: name must not be empty")
+    line = node.start_mark.line + 1
+    return Rule(name or default_name(spec), kind, spec, index, line), bool(names)
+
+
+def parse_budget(text: str, path: str) -> Budget:
+    """Parse a budget's YAML text; ``path`` names it in errors.
+
+    Raises:
+        ConfigError: invalid YAML, an unknown key, a wrong type or value (with file and line).
+    """
+    reader = _Reader(path)
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as err:
+        line = err.problem_mark.line + 1 if err.problem_mark is not None else None
+        raise ConfigError(f"invalid YAML: {err.problem}", path=path, line=line) from None
+    except yaml.YAMLError as err:
+        raise ConfigError(f"invalid YAML: {err}", path=path) from None
+    if root is None:
+        raise ConfigError("empty budget: expected 'version: 1' and a list of 'rules'", path=path)
+    values = {k: (kn, v) for k, kn, v in reader.mapping(root, "budget", allowed=_TOP_KEYS)}
+    if "version" not in values:
+        raise reader.fail(root, "budget: 'version: 1' is required (the budget format version)")
+    version_node = values["version"][1]
+    version = reader.count(version_node, "version")
+    if version != BUDGET_VERSION:
+        raise reader.fail(
+            version_node,
+            f"version: budget format {version} is not supported by this medkit-replay "
+            f"(it reads version {BUDGET_VERSION})",
+        )
+    name: str | None = None
+    if "name" in values:
+        name = reader.string(values["name"][1], "name").strip() or None
+    if "rules" not in values:
+        raise reader.fail(root, "budget: 'rules' (the list of rules) is required")
+    rules_node = values["rules"][1]
+    if not isinstance(rules_node, yaml.SequenceNode):
+        raise reader.fail(rules_node, f"rules: expected a list of rules, found {_kind(rules_node)}")
+    if not rules_node.value:
+        raise reader.fail(rules_node, "rules: the budget has no rule")
+    parsed = [_rule(reader, node, n) for n, node in enumerate(rules_node.value, start=1)]
+    return Budget(path=path, rules=_unique_names(reader, parsed), name=name, version=version)
+
+
+def _unique_names(reader: _Reader, parsed: list[tuple[Rule, bool]]) -> tuple[Rule, ...]:
+    """Given names must differ; a derived name that repeats one gets its rule number."""
+    given: dict[str, Rule] = {}
+    for rule, named in parsed:
+        if named:
+            if rule.name in given:
+                first = given[rule.name]
+                raise ConfigError(
+                    f"rule {rule.index}: name '{rule.name}' is already used by rule {first.index}",
+                    path=reader.path,
+                    line=rule.line,
+                )
+            given[rule.name] = rule
+    taken = set(given)
+    rules: list[Rule] = []
+    for rule, named in parsed:
+        if not named:
+            name = rule.name
+            if name in taken:
+                name = f"{name} (rule {rule.index})"
+            taken.add(name)
+            rule = Rule(name, rule.kind, rule.spec, rule.index, rule.line)
+        rules.append(rule)
+    return tuple(rules)
+
+
+def load_budget(path: str | Path) -> Budget:
+    """Read and parse a budget file.
+
+    Raises:
+        ConfigError: the file is missing, unreadable or not a valid budget (file and line).
+    """
+    shown = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError("budget file not found", path=shown) from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(f"cannot read budget file: {err}", path=shown) from None
+    return parse_budget(text, shown)

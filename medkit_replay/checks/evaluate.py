@@ -1,0 +1,464 @@
+"""Verdicts of a fault budget on one replay: one Verdict per rule, with the offending faults.
+
+Pure: reads only the Result (transitions, faults, events, muting and clusters) and the Budget;
+no I/O, no clock. The exact meaning of every rule is documented in docs/budgets.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from medkit_replay.checks.budget import (
+    SEVERITIES,
+    AllowConfirm,
+    ExpectCluster,
+    ExpectConfirmed,
+    ExpectNotConfirmed,
+    MaxConfirmed,
+    MaxConfirmedDuration,
+    MaxOccurrences,
+    NeverConfirm,
+    Pattern,
+    ResolvedByEnd,
+    matches_any,
+    seconds_text,
+    severity_text,
+)
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+
+    from medkit_replay.checks.budget import Budget, Rule
+    from medkit_replay.model import FaultSnapshot
+    from medkit_replay.result import Result
+
+RESOLVED = ("HEALED", "CLEARED")
+"""Final statuses that count as healed or cleared by the end."""
+
+
+@dataclass(frozen=True, slots=True)
+class Offender:
+    """A fault that makes a rule fail, with the time it did so."""
+
+    fault_code: str
+    t_ns: int | None
+    """Bag time of the offence (a confirmation, the start of a stretch, the last occurrence)."""
+    offset_ns: int | None
+    """The same time from the recording's start."""
+    detail: str
+
+    @property
+    def at(self) -> str:
+        """``78.372 s`` from the recording's start, or an empty string when there is no time."""
+        return f"{self.offset_ns / 1e9:.3f} s" if self.offset_ns is not None else ""
+
+    def text(self) -> str:
+        """``CODE at 78.372 s: detail`` on one line."""
+        when = f" at {self.at}" if self.at else ""
+        return f"{self.fault_code}{when}: {self.detail}"
+
+
+@dataclass(frozen=True, slots=True)
+class Verdict:
+    """Whether one rule held on one run, in one line, and which faults broke it."""
+
+    rule: Rule
+    passed: bool
+    message: str
+    offenders: tuple[Offender, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class CheckRun:
+    """A budget checked on one run (one input, or several merged as one recording)."""
+
+    label: str
+    inputs: tuple[str, ...]
+    budget: Budget
+    verdicts: tuple[Verdict, ...]
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def passed(self) -> bool:
+        """Every rule held."""
+        return all(v.passed for v in self.verdicts)
+
+    @property
+    def failures(self) -> tuple[Verdict, ...]:
+        """The verdicts of the rules that did not hold."""
+        return tuple(v for v in self.verdicts if not v.passed)
+
+
+def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun:
+    """The budget's verdicts on a replay of ``inputs``, labelled for the outputs."""
+    return CheckRun(
+        label=" + ".join(inputs),
+        inputs=tuple(inputs),
+        budget=budget,
+        verdicts=evaluate(budget, result),
+        warnings=result.warnings,
+    )
+
+
+def evaluate(budget: Budget, result: Result) -> tuple[Verdict, ...]:
+    """One Verdict per rule of the budget, in the budget's order."""
+    facts = _Facts(result)
+    return tuple(_verdict(rule, facts) for rule in budget.rules)
+
+
+# -- what the Result says, indexed once ------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class _FormedCluster:
+    cluster_id: str
+    rule_id: str
+    first_at_ns: int | None
+    fault_codes: tuple[str, ...]
+
+
+class _Facts:
+    """Confirmations, CONFIRMED stretches, final states, muting and clusters of one Result."""
+
+    def __init__(self, result: Result) -> None:
+        starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
+        ends = [i.end_ns for i in result.inputs if i.end_ns is not None]
+        if result.summary.start_ns is not None:
+            starts.append(result.summary.start_ns)
+        if result.summary.end_ns is not None:
+            ends.append(result.summary.end_ns)
+        self.start_ns: int | None = min(starts, default=None)
+        self.end_ns: int | None = max(ends, default=None)
+        self.faults: dict[str, FaultSnapshot] = {f.fault_code: f for f in result.faults}
+        self.confirmations: dict[str, list[int]] = {}
+        self.stretches: dict[str, list[tuple[int, int, bool]]] = {}
+        """Per code: (from, to, still CONFIRMED at the end) of every CONFIRMED stretch."""
+        open_since: dict[str, int] = {}
+        for transition in result.transitions:
+            code, t_ns = transition.fault_code, transition.t_ns
+            if transition.to_status == "CONFIRMED":
+                self.confirmations.setdefault(code, []).append(t_ns)
+                open_since.setdefault(code, t_ns)
+            elif code in open_since:
+                since = open_since.pop(code)
+                self.stretches.setdefault(code, []).append((since, t_ns, False))
+        for code, since in open_since.items():
+            end = max(self.end_ns if self.end_ns is not None else since, since)
+            self.stretches.setdefault(code, []).append((since, end, True))
+        self.muted_by: dict[str, set[str]] = {}
+        for muted in result.muted_faults:
+            self.muted_by.setdefault(muted.fault_code, set()).add(muted.root_cause_code)
+        self.clusters: dict[str, _FormedCluster] = {
+            c.cluster_id: _FormedCluster(c.cluster_id, c.rule_id, c.first_at_ns, c.fault_codes)
+            for c in result.clusters
+        }
+        seen: dict[str, list[str]] = {}
+        for event in result.events:
+            fault = event.fault
+            if fault.muted and fault.root_cause_code is not None:
+                self.muted_by.setdefault(fault.fault_code, set()).add(fault.root_cause_code)
+            for cluster_id in fault.cluster_ids:
+                _add_member(seen, cluster_id, fault.fault_code)
+        for fault in result.faults:
+            for cluster_id in fault.cluster_ids:
+                _add_member(seen, cluster_id, fault.fault_code)
+        for mute in result.retroactive_mutes:
+            for code in mute.fault_codes:
+                _add_member(seen, mute.cluster_id, code)
+        for cluster_id, codes in seen.items():
+            if cluster_id not in self.clusters:  # formed, but no longer active at the end
+                rule_id = cluster_id.rsplit("_", 1)[0]  # upstream's ids: "<rule id>_<counter>"
+                self.clusters[cluster_id] = _FormedCluster(cluster_id, rule_id, None, tuple(codes))
+
+    def offset(self, t_ns: int | None) -> int | None:
+        if t_ns is None or self.start_ns is None:
+            return None
+        return t_ns - self.start_ns
+
+    def offender(self, code: str, t_ns: int | None, detail: str) -> Offender:
+        return Offender(code, t_ns, self.offset(t_ns), detail)
+
+    def confirmed_codes(self) -> list[str]:
+        """Codes that confirmed at least once, by first confirmation, then code."""
+        return sorted(self.confirmations, key=lambda c: (self.confirmations[c][0], c))
+
+    def at(self, t_ns: int) -> str:
+        offset = self.offset(t_ns)
+        return f"{offset / 1e9:.3f} s" if offset is not None else "?"
+
+
+def _add_member(seen: dict[str, list[str]], cluster_id: str, code: str) -> None:
+    codes = seen.setdefault(cluster_id, [])
+    if code not in codes:
+        codes.append(code)
+
+
+def _faults(count: int) -> str:
+    return f"{count} fault" + ("" if count == 1 else "s")
+
+
+def _patterns(patterns: Iterable[Pattern]) -> str:
+    return ", ".join(str(p) for p in patterns)
+
+
+def _sorted(offenders: Iterable[Offender]) -> tuple[Offender, ...]:
+    return tuple(
+        sorted(
+            offenders,
+            key=lambda o: (o.t_ns is None, o.t_ns if o.t_ns is not None else 0, o.fault_code),
+        )
+    )
+
+
+# -- the rules ---------------------------------------------------------------------------------
+
+
+def _verdict(rule: Rule, facts: _Facts) -> Verdict:
+    spec = rule.spec
+    if isinstance(spec, MaxConfirmed):
+        return _max_confirmed(rule, spec, facts)
+    if isinstance(spec, NeverConfirm):
+        return _never_confirm(rule, spec, facts)
+    if isinstance(spec, AllowConfirm):
+        return _allow_confirm(rule, spec, facts)
+    if isinstance(spec, MaxOccurrences):
+        return _max_occurrences(rule, spec, facts)
+    if isinstance(spec, MaxConfirmedDuration):
+        return _max_duration(rule, spec, facts)
+    if isinstance(spec, ResolvedByEnd):
+        return _resolved_by_end(rule, spec, facts)
+    if isinstance(spec, ExpectConfirmed):
+        return _expect_confirmed(rule, spec, facts)
+    if isinstance(spec, ExpectNotConfirmed):
+        return _expect_not_confirmed(rule, spec, facts)
+    return _expect_cluster(rule, spec, facts)
+
+
+def _severity_of(facts: _Facts, code: str) -> int:
+    fault = facts.faults.get(code)
+    return fault.severity if fault is not None else 0
+
+
+def _max_confirmed(rule: Rule, spec: MaxConfirmed, facts: _Facts) -> Verdict:
+    by_severity: dict[int, list[str]] = {}
+    for code in facts.confirmed_codes():
+        by_severity.setdefault(_severity_of(facts, code), []).append(code)
+    over: list[str] = []
+    within: list[str] = []
+    offenders: list[Offender] = []
+    for severity, limit in spec.limits:
+        codes = by_severity.get(severity, [])
+        name = SEVERITIES[severity]
+        if len(codes) > limit:
+            over.append(f"{name} {len(codes)} confirmed, at most {limit} allowed")
+            offenders += [
+                facts.offender(code, facts.confirmations[code][0], f"{name}, confirmed")
+                for code in codes
+            ]
+        else:
+            within.append(f"{name} {len(codes)} of at most {limit}")
+    if over:
+        return Verdict(rule, False, "; ".join(over), _sorted(offenders))
+    return Verdict(rule, True, "confirmed: " + ", ".join(within))
+
+
+def _never_confirm(rule: Rule, spec: NeverConfirm, facts: _Facts) -> Verdict:
+    offenders = []
+    for code in facts.confirmed_codes():
+        pattern = matches_any(code, spec.patterns)
+        if pattern is not None:
+            times = facts.confirmations[code]
+            detail = f"confirmed ({pattern} must never confirm)"
+            if len(times) > 1:
+                detail = f"confirmed {len(times)} times ({pattern} must never confirm)"
+            offenders.append(facts.offender(code, times[0], detail))
+    if offenders:
+        message = f"{_faults(len(offenders))} confirmed that must never confirm"
+        return Verdict(rule, False, message, _sorted(offenders))
+    return Verdict(rule, True, f"no fault matching {_patterns(spec.patterns)} confirmed")
+
+
+def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: _Facts) -> Verdict:
+    confirmed = facts.confirmed_codes()
+    offenders = [
+        facts.offender(
+            code,
+            facts.confirmations[code][0],
+            f"{severity_text(_severity_of(facts, code))}, confirmed but not allowed to",
+        )
+        for code in confirmed
+        if matches_any(code, spec.patterns) is None
+    ]
+    if offenders:
+        message = f"{_faults(len(offenders))} confirmed that no allowed pattern matches"
+        return Verdict(rule, False, message, _sorted(offenders))
+    return Verdict(rule, True, f"{_faults(len(confirmed))} confirmed, all allowed")
+
+
+def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: _Facts) -> Verdict:
+    offenders: list[Offender] = []
+    highest: tuple[int, str] | None = None
+    for pattern, limit in spec.limits:
+        for code, fault in facts.faults.items():
+            if not pattern.matches(code):
+                continue
+            count = fault.occurrence_count
+            if count > limit:
+                detail = f"{count} occurrences, at most {limit} allowed ({pattern})"
+                offenders.append(facts.offender(code, fault.last_occurred_ns, detail))
+            elif highest is None or count > highest[0]:
+                highest = (count, code)
+    if offenders:
+        message = f"{_faults(len(offenders))} occurred more often than allowed"
+        return Verdict(rule, False, message, _sorted(offenders))
+    if highest is None:
+        return Verdict(rule, True, "no fault matching the patterns was reported")
+    return Verdict(
+        rule, True, f"within limits; highest: {highest[1]} with {highest[0]} occurrence(s)"
+    )
+
+
+def _longest(facts: _Facts, code: str) -> tuple[int, int, bool] | None:
+    stretches = facts.stretches.get(code)
+    if not stretches:
+        return None
+    return max(stretches, key=lambda s: (s[1] - s[0], -s[0]))
+
+
+def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: _Facts) -> Verdict:
+    offenders: list[Offender] = []
+    longest_seen: tuple[int, str] | None = None
+    for pattern, limit in spec.limits:
+        limit_ns = round(limit * 1e9)
+        for code in facts.confirmed_codes():
+            longest = _longest(facts, code) if pattern.matches(code) else None
+            if longest is None:
+                continue
+            since, until, still = longest
+            length = until - since
+            if length > limit_ns:
+                detail = (
+                    f"CONFIRMED for {length / 1e9:.3f} s, at most {seconds_text(limit)} s "
+                    f"allowed ({pattern})"
+                )
+                if still:
+                    detail += "; still CONFIRMED at the end of the recording"
+                else:
+                    detail += f"; until {facts.at(until)}"
+                offenders.append(facts.offender(code, since, detail))
+            elif longest_seen is None or length > longest_seen[0]:
+                longest_seen = (length, code)
+    if offenders:
+        message = f"{_faults(len(offenders))} stayed CONFIRMED longer than allowed"
+        return Verdict(rule, False, message, _sorted(offenders))
+    if longest_seen is None:
+        return Verdict(rule, True, "no fault matching the patterns confirmed")
+    code = longest_seen[1]
+    return Verdict(rule, True, f"within limits; longest: {code} for {longest_seen[0] / 1e9:.3f} s")
+
+
+def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: _Facts) -> Verdict:
+    offenders: list[Offender] = []
+    checked = 0
+    for code in facts.confirmed_codes():
+        if matches_any(code, spec.patterns) is None:
+            continue
+        checked += 1
+        fault = facts.faults.get(code)
+        status = fault.status if fault is not None else "unknown"
+        if status not in RESOLVED:
+            last = facts.confirmations[code][-1]
+            detail = f"confirmed, still {status} at the end"
+            offenders.append(facts.offender(code, last, detail))
+    if offenders:
+        message = f"{_faults(len(offenders))} not healed or cleared by the end"
+        return Verdict(rule, False, message, _sorted(offenders))
+    if not checked:
+        return Verdict(rule, True, f"no fault matching {_patterns(spec.patterns)} confirmed")
+    return Verdict(rule, True, f"{_faults(checked)} confirmed, all healed or cleared by the end")
+
+
+def _in_window(facts: _Facts, t_ns: int, spec: ExpectConfirmed | ExpectNotConfirmed) -> bool:
+    if spec.between is None:
+        return True
+    offset = facts.offset(t_ns)
+    return offset is not None and spec.between.holds(offset)
+
+
+def _expect_confirmed(rule: Rule, spec: ExpectConfirmed, facts: _Facts) -> Verdict:
+    seen = [
+        (t_ns, code)
+        for code in facts.confirmed_codes()
+        if spec.code.matches(code)
+        for t_ns in facts.confirmations[code]
+    ]
+    seen.sort()
+    inside = [(t, code) for t, code in seen if _in_window(facts, t, spec)]
+    window = f" {spec.between}" if spec.between is not None else ""
+    if not seen:
+        return Verdict(rule, False, f"no fault matching {spec.code} confirmed")
+    if not inside:
+        offenders = [facts.offender(code, t, "confirmed outside the window") for t, code in seen]
+        return Verdict(rule, False, f"{spec.code} confirmed, but not{window}", _sorted(offenders))
+    if spec.muted_by is not None:
+        muted_by = spec.muted_by
+        hits = [
+            (t, code)
+            for t, code in inside
+            if any(muted_by.matches(root) for root in facts.muted_by.get(code, ()))
+        ]
+        if not hits:
+            offenders = [
+                facts.offender(
+                    code,
+                    t,
+                    "muted by " + ", ".join(sorted(facts.muted_by[code]))
+                    if facts.muted_by.get(code)
+                    else "never muted by a root cause",
+                )
+                for t, code in inside
+            ]
+            message = f"{spec.code} confirmed{window}, but not muted by {muted_by}"
+            return Verdict(rule, False, message, _sorted(offenders))
+        t_ns, code = hits[0]
+        roots = ", ".join(sorted(r for r in facts.muted_by[code] if muted_by.matches(r)))
+        return Verdict(rule, True, f"{code} confirmed at {facts.at(t_ns)}, muted by {roots}")
+    t_ns, code = inside[0]
+    return Verdict(rule, True, f"{code} confirmed at {facts.at(t_ns)}{window}")
+
+
+def _expect_not_confirmed(rule: Rule, spec: ExpectNotConfirmed, facts: _Facts) -> Verdict:
+    window = f" {spec.between}" if spec.between is not None else ""
+    offenders = [
+        facts.offender(code, t_ns, "confirmed")
+        for code in facts.confirmed_codes()
+        if spec.code.matches(code)
+        for t_ns in facts.confirmations[code]
+        if _in_window(facts, t_ns, spec)
+    ]
+    if offenders:
+        return Verdict(rule, False, f"{spec.code} confirmed{window}", _sorted(offenders))
+    return Verdict(rule, True, f"no fault matching {spec.code} confirmed{window}")
+
+
+def _expect_cluster(rule: Rule, spec: ExpectCluster, facts: _Facts) -> Verdict:
+    def wanted(cluster: _FormedCluster) -> bool:
+        if spec.rule is not None:
+            return spec.rule.matches(cluster.rule_id)
+        return spec.cluster is not None and spec.cluster.matches(cluster.cluster_id)
+
+    ids = sorted(facts.clusters, key=lambda c: c.encode("utf-8"))
+    formed = [facts.clusters[c] for c in ids if wanted(facts.clusters[c])]
+    what = f"of rule {spec.rule}" if spec.rule is not None else f"matching {spec.cluster}"
+    if not formed:
+        others = ", ".join(ids) if ids else "none"
+        return Verdict(rule, False, f"no cluster {what} formed (clusters formed: {others})")
+    cluster = formed[0]
+    when = f" at {facts.at(cluster.first_at_ns)}" if cluster.first_at_ns is not None else ""
+    members = ", ".join(cluster.fault_codes)
+    return Verdict(
+        rule,
+        True,
+        f"{cluster.cluster_id} formed{when} (rule {cluster.rule_id}: {members})",
+    )

@@ -1,0 +1,97 @@
+"""Budget verdicts as JUnit XML: one testsuite per run, one testcase per rule.
+
+A failed rule is a ``<failure>`` whose ``message`` names the offending faults on one line and
+whose text lists them one per line. Written with xml.etree; text XML cannot hold is escaped.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from typing import TYPE_CHECKING
+
+from medkit_replay.checks.text import xml_text
+from medkit_replay.version import __version__
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from pathlib import Path
+
+    from medkit_replay.checks.evaluate import CheckRun, Verdict
+
+MAX_IN_MESSAGE = 20
+"""Offending faults named in a failure's one-line message; its text lists every one."""
+
+
+def failure_message(verdict: Verdict) -> str:
+    """The verdict's line and the offending faults, on one line."""
+    offenders = [o.text() for o in verdict.offenders[:MAX_IN_MESSAGE]]
+    hidden = len(verdict.offenders) - MAX_IN_MESSAGE
+    if hidden > 0:
+        offenders.append(f"and {hidden} more")
+    return verdict.message + (": " + "; ".join(offenders) if offenders else "")
+
+
+def _testcase(suite: ET.Element, run: CheckRun, verdict: Verdict) -> None:
+    rule = verdict.rule
+    case = ET.SubElement(
+        suite,
+        "testcase",
+        {
+            "name": xml_text(rule.name),
+            "classname": xml_text(run.label),
+            "file": xml_text(run.budget.path),
+        },
+    )
+    if rule.line is not None:
+        case.set("line", str(rule.line))
+    if verdict.passed:
+        ET.SubElement(case, "system-out").text = xml_text(verdict.message)
+        return
+    failure = ET.SubElement(
+        case, "failure", {"message": xml_text(failure_message(verdict)), "type": rule.kind}
+    )
+    lines = [verdict.message, *(f"- {o.text()}" for o in verdict.offenders)]
+    failure.text = xml_text("\n".join(lines))
+
+
+def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
+    """The JUnit document of a check: its ``testsuites`` root element, indented."""
+    tests = sum(len(r.verdicts) for r in runs)
+    failures = sum(len(r.failures) for r in runs)
+    root = ET.Element(
+        "testsuites",
+        {
+            "name": "medkit-replay check",
+            "tests": str(tests),
+            "failures": str(failures),
+            "errors": "0",
+        },
+    )
+    for run in runs:
+        suite = ET.SubElement(
+            root,
+            "testsuite",
+            {
+                "name": xml_text(run.label),
+                "tests": str(len(run.verdicts)),
+                "failures": str(len(run.failures)),
+                "errors": "0",
+                "skipped": "0",
+            },
+        )
+        properties = ET.SubElement(suite, "properties")
+        entries = [("budget", run.budget.path), ("medkit_replay_version", __version__)]
+        entries += [("input", path) for path in run.inputs]
+        for name, value in entries:
+            ET.SubElement(properties, "property", {"name": name, "value": xml_text(value)})
+        for verdict in run.verdicts:
+            _testcase(suite, run, verdict)
+        if run.warnings:
+            ET.SubElement(suite, "system-err").text = xml_text("\n".join(run.warnings))
+    ET.indent(root)
+    return root
+
+
+def write_junit(runs: Sequence[CheckRun], path: Path) -> None:
+    """Write the JUnit XML file (UTF-8, with an XML declaration)."""
+    ET.ElementTree(junit_element(runs)).write(path, encoding="utf-8", xml_declaration=True)

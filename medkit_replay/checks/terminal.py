@@ -1,0 +1,117 @@
+"""Budget verdicts on the terminal with rich: one line per rule, the offending faults below it.
+
+Colour on a terminal, plain text (80 columns or ``COLUMNS``) in a file, a pipe or a CI log.
+Recorded text goes into ``rich.text.Text`` objects after :func:`printable`: never parsed as
+markup or emoji, never able to move the cursor.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, TextIO
+
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+from medkit_replay.checks.text import printable
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from rich.console import RenderableType
+
+    from medkit_replay.checks.evaluate import CheckRun, Verdict
+
+PLAIN_WIDTH = 4096
+"""Columns of plain output: wide enough that no verdict line wraps."""
+MAX_OFFENDERS = 10
+"""Offending faults listed per rule on the terminal; JUnit and the step summary list more."""
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}" + ("" if count == 1 else "s")
+
+
+def _verdict_rows(grid: Table, verdict: Verdict) -> None:
+    mark = Text("PASS", style="bold green") if verdict.passed else Text("FAIL", style="bold red")
+    line = Text(printable(verdict.rule.name), style="bold")
+    line.append(": ")
+    line.append(printable(verdict.message))
+    if not verdict.offenders:
+        grid.add_row(mark, line)
+        return
+    offenders = Table.grid(padding=(0, 1))
+    offenders.add_column(no_wrap=True)
+    offenders.add_column(overflow="fold")
+    for offender in verdict.offenders[:MAX_OFFENDERS]:
+        offenders.add_row(Text("-"), Text(printable(offender.text()), style="red"))
+    hidden = len(verdict.offenders) - MAX_OFFENDERS
+    if hidden > 0:
+        offenders.add_row(Text(""), Text(f"... and {hidden} more", style="dim"))
+    grid.add_row(mark, Group(line, offenders))
+
+
+def run_renderable(run: CheckRun) -> list[RenderableType]:
+    """The verdicts of one run: a heading, a line per rule, the replay's warnings."""
+    failed = len(run.failures)
+    head = Text("check ", style="bold")
+    head.append(printable(run.label), style="bold")
+    head.append(f" against {printable(run.budget.title)}: ")
+    if failed:
+        head.append(f"{failed} of {_plural(len(run.verdicts), 'rule')} failed", style="bold red")
+    else:
+        head.append(f"all {_plural(len(run.verdicts), 'rule')} passed", style="bold green")
+    grid = Table.grid(padding=(0, 1))
+    grid.add_column(no_wrap=True)
+    grid.add_column(overflow="fold")
+    for verdict in run.verdicts:
+        _verdict_rows(grid, verdict)
+    for warning in run.warnings:
+        grid.add_row(Text("!", style="bold yellow"), Text(printable(warning), style="yellow"))
+    return [head, grid, Text("")]
+
+
+def conclusion(runs: Sequence[CheckRun]) -> Text:
+    """The last line: whether the budget held on every run."""
+    failed_runs = [r for r in runs if not r.passed]
+    rules = len(runs[0].verdicts) if runs else 0
+    if not failed_runs:
+        return Text(
+            f"budget holds: {_plural(rules, 'rule')} passed on {_plural(len(runs), 'run')}",
+            style="bold green",
+        )
+    failures = sum(len(r.failures) for r in failed_runs)
+    return Text(
+        f"budget exceeded: {_plural(failures, 'rule verdict')} failed in "
+        f"{len(failed_runs)} of {_plural(len(runs), 'run')}",
+        style="bold red",
+    )
+
+
+def _console(stream: TextIO, width: int | None = None) -> Console:
+    return Console(file=stream, width=width, markup=False, emoji=False, highlight=False)
+
+
+def print_renderables(renderables: Sequence[RenderableType], stream: TextIO) -> None:
+    """Draw on ``stream``: colour on a terminal; elsewhere plain text, one line per verdict and
+    per offending fault however long (CI logs are searched, not read at 80 columns)."""
+    console = _console(stream)
+    if console.is_terminal:
+        for renderable in renderables:
+            console.print(renderable)
+        return
+    console = _console(stream, PLAIN_WIDTH)
+    with console.capture() as capture:
+        for renderable in renderables:
+            console.print(renderable)
+    stream.write("\n".join(line.rstrip(" ") for line in capture.get().split("\n")))
+
+
+def print_run(run: CheckRun, stream: TextIO) -> None:
+    """The verdicts of one run (printed as soon as the run is checked)."""
+    print_renderables(run_renderable(run), stream)
+
+
+def print_conclusion(runs: Sequence[CheckRun], stream: TextIO) -> None:
+    """The closing line over every run."""
+    print_renderables([conclusion(runs)], stream)

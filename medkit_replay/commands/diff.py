@@ -1,0 +1,208 @@
+"""``medkit-replay diff BASELINE CURRENT``: what changed between two reports, or since a baseline.
+
+Thin: reads or replays both sides, hands the report dicts to :mod:`medkit_replay.diffing`, writes
+its human and JSON output, rewrites the baseline on ``--update``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+from contextlib import nullcontext
+from pathlib import Path
+from typing import TYPE_CHECKING, TextIO
+
+import click
+from rich.console import Console
+from rich.text import Text
+
+from medkit_replay.diffing import diff_renderable, diff_reports, tolerance_ns
+from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.outputs.json_report import to_report, write_json
+from medkit_replay.outputs.progress import progress_bar
+from medkit_replay.pipeline import replay
+
+if TYPE_CHECKING:
+    from medkit_replay.diffing import ReportDiff
+    from medkit_replay.result import Result
+
+
+def is_report_path(path: Path) -> bool:
+    """A ``.json`` file is read as a report; anything else is a recording or script to replay."""
+    return path.suffix.lower() == ".json"
+
+
+def read_report(path: Path) -> dict[str, object]:
+    """A JSON report from a file (checked by the diff, which names the file when it is not one)."""
+    try:
+        with path.open(encoding="utf-8") as stream:
+            report = json.load(stream)
+    except FileNotFoundError:
+        raise InputError("no such report", path=str(path)) from None
+    except IsADirectoryError:
+        raise InputError("is a directory, not a JSON report", path=str(path)) from None
+    except OSError as err:
+        raise InputError(f"cannot read report: {err.strerror}", path=str(path)) from None
+    except UnicodeDecodeError:
+        raise InputError("not a JSON report (not UTF-8 text)", path=str(path)) from None
+    except json.JSONDecodeError as err:
+        raise InputError(f"not valid JSON: {err.msg}", path=str(path), line=err.lineno) from None
+    if not isinstance(report, dict):
+        raise InputError("not a medkit-replay report (not a JSON object)", path=str(path))
+    return report
+
+
+class _Side:
+    """One side of the diff: a report read from a file, or a recording replayed now."""
+
+    def __init__(self, path: Path, configs: tuple[Path, ...], *, quiet: bool) -> None:
+        self.path = path
+        self.result: Result | None = None
+        if is_report_path(path):
+            self.report = read_report(path)
+            return
+        bar = progress_bar(sys.stderr, quiet=quiet)
+        with bar if bar is not None else nullcontext():
+            self.result = replay([path], list(configs), progress=bar)
+        self.report = to_report(self.result)
+
+    @property
+    def name(self) -> str:
+        return str(self.path) if self.result is None else f"{self.path} (replayed now)"
+
+
+def _write_baseline(baseline: Path, current: _Side) -> None:
+    """Replace the baseline with the current report, atomically (a crash leaves the old one)."""
+    directory = baseline.parent
+    try:
+        handle, temporary = tempfile.mkstemp(
+            prefix=f".{baseline.name}.", suffix=".tmp", dir=directory
+        )
+        try:
+            with os.fdopen(handle, "w", encoding="utf-8", newline="\n") as stream:
+                if current.result is not None:
+                    write_json(current.result, stream)
+                else:  # a report file: its bytes as they are
+                    stream.write(current.path.read_text(encoding="utf-8"))
+            Path(temporary).replace(baseline)
+        except BaseException:
+            Path(temporary).unlink(missing_ok=True)
+            raise
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot update the baseline: {err.strerror}", path=str(baseline)
+        ) from None
+
+
+def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
+    console = Console(file=stream, markup=False, emoji=False, highlight=False)
+    renderable = diff_renderable(diff)
+    if console.is_terminal:
+        console.print(renderable, crop=False)
+        for note in notes:
+            console.print(Text(note, style="bold"))
+        return
+    with console.capture() as capture:  # plain text, no padding, as the summary is written
+        console.print(renderable, crop=False)
+    text = "\n".join(line.rstrip(" ") for line in capture.get().split("\n"))
+    stream.write(text + "".join(note + "\n" for note in notes))
+
+
+@click.command()
+@click.argument("baseline", type=click.Path(path_type=Path))
+@click.argument("current", type=click.Path(path_type=Path))
+@click.option(
+    "--config",
+    "configs",
+    multiple=True,
+    type=click.Path(path_type=Path),
+    help="ROS 2 parameter file for a side that is replayed (repeatable).",
+)
+@click.option(
+    "--time-tolerance",
+    "time_tolerance",
+    type=click.FloatRange(min=0.0),
+    default=0.0,
+    show_default=True,
+    metavar="SEC",
+    help="Events and transitions shifted by at most this many seconds of bag time are equal.",
+)
+@click.option(
+    "--json",
+    "json_out",
+    type=str,
+    default=None,
+    help="Write the differences as JSON here ('-' for standard output).",
+)
+@click.option(
+    "--update",
+    is_flag=True,
+    help="Rewrite BASELINE (a .json report) with the current report; exit 0.",
+)
+@click.option("--quiet", is_flag=True, help="No human output, no progress bar.")
+@click.pass_context
+def diff(
+    ctx: click.Context,
+    baseline: Path,
+    current: Path,
+    configs: tuple[Path, ...],
+    time_tolerance: float,
+    json_out: str | None,
+    update: bool,
+    quiet: bool,
+) -> None:
+    """Compare CURRENT with BASELINE: faults, status changes, FaultEvents and clusters.
+
+    Each side is a JSON report (a .json file written by `analyze --json`) or a recording or
+    script, replayed now with the --config files. Exit status: 0 equal, 1 different, 2 bad input.
+
+    \b
+    Examples:
+      medkit-replay diff baseline.json current.json
+      medkit-replay diff baseline.json mission/ --config robot_params.yaml --time-tolerance 0.5
+      medkit-replay diff baseline.json mission/ --config robot_params.yaml --update
+    """
+    tolerance = tolerance_ns(time_tolerance)
+    if update and not is_report_path(baseline):
+        raise MedkitReplayError(
+            "--update rewrites a baseline report: BASELINE must be a .json report",
+            path=str(baseline),
+        )
+    notes: list[str] = []
+    if configs and is_report_path(baseline) and is_report_path(current):
+        notes.append("note: --config is not used: both sides are reports, nothing is replayed")
+    new = _Side(current, configs, quiet=quiet)
+    if update and not baseline.exists():
+        _write_baseline(baseline, new)
+        if not quiet:
+            out = sys.stderr if json_out == "-" else sys.stdout
+            out.write(f"baseline created: {baseline}\n")
+        return
+    old = _Side(baseline, configs, quiet=quiet)
+    result = diff_reports(
+        old.report,
+        new.report,
+        time_tolerance_ns=tolerance,
+        baseline_name=old.name,
+        current_name=new.name,
+    )
+    if update:
+        _write_baseline(baseline, new)
+        notes.append(f"baseline updated: {baseline}")
+    document = result.to_json()
+    if update:
+        document["baseline_updated"] = True
+    if json_out == "-":
+        sys.stdout.write(json.dumps(document, indent=2, ensure_ascii=True) + "\n")
+    elif json_out is not None:
+        try:
+            with Path(json_out).open("w", encoding="utf-8") as stream:
+                stream.write(json.dumps(document, indent=2, ensure_ascii=True) + "\n")
+        except OSError as err:
+            raise MedkitReplayError(f"cannot write diff: {err.strerror}", path=json_out) from None
+    if not quiet:
+        _print(result, sys.stderr if json_out == "-" else sys.stdout, notes)
+    if not result.equal and not update:
+        ctx.exit(1)

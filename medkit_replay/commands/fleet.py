@@ -1,0 +1,123 @@
+"""``medkit-replay fleet INPUT_DIR...``: every recording under some folders, each its own run.
+
+Thin: finds the recordings (:mod:`medkit_replay.fleet.discover`), runs them in processes or on
+a Dask cluster (:mod:`medkit_replay.fleet.run`), writes the report and the summary
+(:mod:`medkit_replay.fleet.report`).
+"""
+
+from __future__ import annotations
+
+import sys
+from contextlib import nullcontext
+from pathlib import Path
+
+import click
+
+from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.fleet.discover import discover
+from medkit_replay.fleet.run import check_configs, dask_client_type, run_all, run_on_dask
+
+DEFAULT_OUT = Path("fleet-report")
+
+
+@click.command()
+@click.argument("input_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option(
+    "--config",
+    "configs",
+    multiple=True,
+    type=click.Path(path_type=Path),
+    help="ROS 2 parameter file for every run (repeatable; later files override earlier ones).",
+)
+@click.option(
+    "--budget",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Fault budget YAML checked on every run (the budget column).",
+)
+@click.option(
+    "--jobs",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: one per CPU; 1 runs in this process).",
+)
+@click.option(
+    "--dask",
+    "dask_address",
+    type=str,
+    default=None,
+    help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=DEFAULT_OUT,
+    show_default=True,
+    help="Folder for runs.csv/.json, codes.csv/.json and index.html.",
+)
+@click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
+def fleet(
+    input_dirs: tuple[Path, ...],
+    configs: tuple[Path, ...],
+    budget: Path | None,
+    jobs: int | None,
+    dask_address: str | None,
+    out_dir: Path,
+    quiet: bool,
+) -> None:
+    """Replay every recording under INPUT_DIR... as its own run and compare the runs.
+
+    Recordings: rosbag2 folders, bare .mcap and .db3 files, .jsonl scripts. A recording that
+    cannot be replayed is reported in its row; the others still run.
+
+    \b
+    Examples:
+      medkit-replay fleet missions/ --config robot_params.yaml --out fleet-report
+      medkit-replay fleet missions/ --jobs 8 --quiet
+      medkit-replay fleet /shared/missions --dask tcp://scheduler:8786
+    """
+    if dask_address is not None and jobs is not None:
+        raise click.UsageError("--jobs and --dask cannot be used together")
+    if dask_address is not None:
+        dask_client_type()  # a missing extra is said before anything runs
+    check_configs(configs)
+    parsed_budget = None
+    if budget is not None:
+        from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
+
+        parsed_budget = load_budget(budget)
+    from medkit_replay.fleet.report import (  # noqa: PLC0415  # pandas: only when it runs
+        fleet_progress,
+        print_summary,
+        write_report,
+    )
+
+    recordings = discover(input_dirs)
+    if not recordings:
+        raise InputError(
+            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
+            path=", ".join(str(d) for d in input_dirs),
+        )
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot create the report folder: {err.strerror}", path=str(out_dir)
+        ) from None
+    bar = fleet_progress(sys.stderr, len(recordings), quiet=quiet)
+    with bar if bar is not None else nullcontext():
+        if dask_address is not None:
+            runs = run_on_dask(dask_address, recordings, configs, budget=parsed_budget, on_done=bar)
+        else:
+            runs = run_all(recordings, configs, budget=parsed_budget, jobs=jobs, on_done=bar)
+    try:
+        write_report(runs, out_dir)
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot write the fleet report: {err.strerror}", path=str(out_dir)
+        ) from None
+    if not quiet:
+        print_summary(runs, sys.stdout, out_dir)
+    if any(run.budget == "fail" for run in runs):
+        click.get_current_context().exit(1)

@@ -1,0 +1,15 @@
+"""Fleets: every recording under some folders replayed as its own run, then compared.
+
+``discover`` finds the recordings, ``run`` replays each one (``run_one``, in processes or on a
+Dask cluster) into a small :class:`RunSummary`, ``stats`` builds the fleet table and the
+cross-run statistics, ``report`` writes them (CSV, JSON, HTML, terminal).
+
+Importing this package is cheap (no pandas): worker processes import ``fleet.run`` only.
+"""
+
+from __future__ import annotations
+
+from medkit_replay.fleet.discover import discover
+from medkit_replay.fleet.run import RunSummary, run_one
+
+__all__ = ["RunSummary", "discover", "run_one"]
