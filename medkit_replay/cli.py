@@ -5,9 +5,11 @@ Thin: the only place errors become one line of text and an exit status.
 
 from __future__ import annotations
 
+import importlib
 import sys
 from contextlib import nullcontext
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
@@ -20,6 +22,9 @@ from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.outputs.terminal import echo, print_summary
 from medkit_replay.pipeline import replay
 from medkit_replay.version import __version__
+
+if TYPE_CHECKING:
+    from medkit_replay.result import Result
 
 
 @click.group()
@@ -65,6 +70,13 @@ def cli() -> None:
     default=None,
     help="Write the replayed FaultEvents and status changes as an MCAP recording.",
 )
+@click.option(
+    "--html",
+    "html_out",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
+)
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
     inputs: tuple[Path, ...],
@@ -73,6 +85,7 @@ def analyze(
     csv_dir: Path | None,
     parquet_dir: Path | None,
     mcap_out: Path | None,
+    html_out: Path | None,
     quiet: bool,
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
@@ -81,6 +94,7 @@ def analyze(
     Examples:
       medkit-replay analyze mission/ --config robot_params.yaml --json report.json
       medkit-replay analyze run.jsonl --json - --quiet
+      medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
     if parquet_dir is not None:
@@ -98,35 +112,25 @@ def analyze(
                 write_json(result, stream)
         except OSError as err:
             raise MedkitReplayError(f"cannot write report: {err.strerror}", path=json_out) from None
-    if csv_dir is not None:
-        try:
-            from medkit_replay.outputs.tables import write_csv  # noqa: PLC0415  # pandas
-
-            write_csv(result, csv_dir)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write CSV: {err.strerror}", path=str(csv_dir)
-            ) from None
-    if parquet_dir is not None:
-        try:
-            from medkit_replay.outputs.parquet import write_parquet  # noqa: PLC0415
-
-            write_parquet(result, parquet_dir)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write Parquet: {err.strerror}", path=str(parquet_dir)
-            ) from None
-    if mcap_out is not None:
-        try:
-            from medkit_replay.outputs.mcap_events import write_mcap  # noqa: PLC0415
-
-            write_mcap(result, mcap_out)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write MCAP: {err.strerror}", path=str(mcap_out)
-            ) from None
+    for target, label, module, function in (
+        (csv_dir, "CSV", "medkit_replay.outputs.tables", "write_csv"),
+        (parquet_dir, "Parquet", "medkit_replay.outputs.parquet", "write_parquet"),
+        (mcap_out, "MCAP", "medkit_replay.outputs.mcap_events", "write_mcap"),
+        (html_out, "HTML", "medkit_replay.outputs.html", "write_html"),
+    ):
+        if target is not None:
+            _write_output(result, target, label, module, function)
     if not quiet:
         print_summary(result, sys.stderr if json_out == "-" else sys.stdout)
+
+
+def _write_output(result: Result, target: Path, label: str, module: str, function: str) -> None:
+    """Run one file output; its module is imported only now (pandas, pyarrow, mcap are heavy)."""
+    writer = getattr(importlib.import_module(module), function)
+    try:
+        writer(result, target)
+    except OSError as err:
+        raise MedkitReplayError(f"cannot write {label}: {err.strerror}", path=str(target)) from None
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -227,3 +227,19 @@ def test_python_api_tables() -> None:
     assert faults.set_index("fault_code").loc["ESTOP_PRESSED", "status"] == "CONFIRMED"
     fault = result.fault("LIDAR_SCAN_DROPOUT")
     assert fault is not None and fault.status == "HEALED"
+
+
+def test_html_report_option(tmp_path: Path) -> None:
+    out = tmp_path / "report.html"
+    assert (
+        main(["analyze", str(EXAMPLE), "--config", str(NAV2), "--html", str(out), "--quiet"]) == 0
+    )
+    text = out.read_text()
+    assert text.startswith("<!DOCTYPE html>") or text.lower().startswith("<!doctype html>")
+    assert text.count('class="fault-row"') == 8
+
+
+def test_unwritable_output_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "missing-dir" / "report.html"
+    status, _, err = run(["analyze", str(EXAMPLE), "--html", str(target), "--quiet"], capsys)
+    assert status == 2 and err.count("\n") == 1 and "cannot write HTML" in err

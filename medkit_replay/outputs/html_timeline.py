@@ -1,0 +1,352 @@
+"""Timeline lanes for the HTML report: status bands, markers and counter traces per fault.
+
+Reads only the Result, one pass over each record list; every list it keeps is bounded, and the
+bounding is deterministic (fixed caps, time bins over the recording's span, first-come order).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from medkit_replay.model import NS_PER_SEC, Severity
+from medkit_replay.result import STATUSES
+
+if TYPE_CHECKING:
+    from medkit_replay.model import FaultSnapshot, NearMiss
+    from medkit_replay.result import Result
+
+ROW_CAP = 1000  # timeline rows; beyond it the most serious faults are kept
+BAND_CAP = 200  # status periods per fault drawn exactly; beyond it, BAND_BINS time bins
+BAND_BINS = 400
+MARKER_CAP = 200  # event and clear markers per fault drawn exactly; beyond it, one per bin and kind
+MARKER_BINS = 200
+TRACE_CAP = 1000  # counter-trace points per fault; beyond it, min and max per bin
+TRACE_BINS = 500
+NEAR_CAP = 200  # near misses listed per fault
+
+# Most serious first: binned bands show the worst status of their interval.
+STATUS_RANK = {"CLEARED": 0, "HEALED": 1, "PREPASSED": 2, "PREFAILED": 3, "CONFIRMED": 4}
+RANK_STATUS = {rank: status for status, rank in STATUS_RANK.items()}
+STATUS_INDEX = {"PREFAILED": 0, "PREPASSED": 1, "CONFIRMED": 2, "HEALED": 3, "CLEARED": 4}
+MARKER_ORDER = {"fault_confirmed": 0, "fault_updated": 1, "fault_cleared": 2, "clear": 3}
+
+# t_s, counter, confirmation threshold, healing threshold, PASSED (0/1), status index
+TracePoint = tuple[float, int, int, int, int, int]
+
+
+def severity_name(severity: int) -> str:
+    """INFO, WARN, ERROR, CRITICAL, or the raw number."""
+    try:
+        return Severity(severity).name
+    except ValueError:
+        return str(severity)
+
+
+@dataclass(frozen=True, slots=True)
+class Span:
+    """The recording's bag-time span; the timeline's x axis runs over it (start inclusive)."""
+
+    start_ns: int
+    end_ns: int
+
+    @classmethod
+    def of(cls, result: Result) -> Span:
+        """From the summary; a span of at least 1 ms, so positions are always defined."""
+        start = result.summary.start_ns
+        end = result.summary.end_ns
+        if start is None or end is None:
+            start = end = 0
+        return cls(start, max(end, start + NS_PER_SEC // 1000))
+
+    @property
+    def duration_ns(self) -> int:
+        """End minus start (positive)."""
+        return self.end_ns - self.start_ns
+
+    def seconds(self, t_ns: int) -> float:
+        """Seconds since the start, to the microsecond."""
+        return round((t_ns - self.start_ns) / NS_PER_SEC, 6)
+
+    def label(self, t_ns: int) -> str:
+        """Seconds since the start as text, to the millisecond."""
+        return f"{(t_ns - self.start_ns) / NS_PER_SEC:.3f} s"
+
+    def percent(self, t_ns: int) -> float:
+        """Position in the span in percent, clamped to [0, 100]."""
+        frac = (t_ns - self.start_ns) / self.duration_ns
+        return min(max(frac, 0.0), 1.0) * 100.0
+
+    def bin(self, t_ns: int, bins: int) -> int:
+        """The time bin of an instant, 0 .. bins-1 (integer arithmetic: exact)."""
+        index = (t_ns - self.start_ns) * bins // self.duration_ns
+        return min(max(index, 0), bins - 1)
+
+    def bin_start(self, index: int, bins: int) -> int:
+        """The first instant of a time bin."""
+        return self.start_ns + self.duration_ns * index // bins
+
+
+@dataclass(frozen=True, slots=True)
+class Band:
+    """One status period of one fault, [start_ns, end_ns)."""
+
+    start_ns: int
+    end_ns: int
+    status: str
+    tip: str
+
+
+@dataclass(frozen=True, slots=True)
+class Marker:
+    """An event or a ClearFault request on a fault's row."""
+
+    t_ns: int
+    kind: str
+    tip: str
+
+
+@dataclass(slots=True)
+class _Bands:
+    span: Span
+    exact: list[Band] = field(default_factory=list)
+    bins: list[int] | None = None
+    count: int = 0
+
+    def add(self, band: Band) -> None:
+        self.count += 1
+        if self.bins is None:
+            self.exact.append(band)
+            if len(self.exact) <= BAND_CAP:
+                return
+            self.bins = [-1] * BAND_BINS
+            for kept in self.exact:
+                self._fill(kept)
+            self.exact = []
+            return
+        self._fill(band)
+
+    def _fill(self, band: Band) -> None:
+        assert self.bins is not None
+        rank = STATUS_RANK.get(band.status, 0)
+        last = self.span.bin(max(band.end_ns - 1, band.start_ns), BAND_BINS)
+        for index in range(self.span.bin(band.start_ns, BAND_BINS), last + 1):
+            self.bins[index] = max(self.bins[index], rank)
+
+    def result(self) -> list[Band]:
+        if self.bins is None:
+            return self.exact
+        bands: list[Band] = []
+        index = 0
+        while index < BAND_BINS:
+            rank = self.bins[index]
+            end = index
+            while end + 1 < BAND_BINS and self.bins[end + 1] == rank:
+                end += 1
+            if rank >= 0:
+                start_ns = self.span.bin_start(index, BAND_BINS)
+                end_ns = self.span.bin_start(end + 1, BAND_BINS)
+                status = RANK_STATUS[rank]
+                when = f"{self.span.label(start_ns)} \u2013 {self.span.label(end_ns)}"
+                tip = (
+                    f"{status} at worst, {when}\n"
+                    f"downsampled: {self.count} status periods in this fault"
+                )
+                bands.append(Band(start_ns, end_ns, status, tip))
+            index = end + 1
+        return bands
+
+
+@dataclass(slots=True)
+class _Markers:
+    span: Span
+    exact: list[Marker] = field(default_factory=list)
+    binned: dict[tuple[int, int], tuple[Marker, int]] = field(default_factory=dict)
+    count: int = 0
+
+    def add(self, marker: Marker) -> None:
+        self.count += 1
+        if self.count <= MARKER_CAP:
+            self.exact.append(marker)
+        key = (self.span.bin(marker.t_ns, MARKER_BINS), MARKER_ORDER.get(marker.kind, 9))
+        first, seen = self.binned.get(key, (marker, 0))
+        self.binned[key] = (first, seen + 1)
+
+    def result(self) -> list[Marker]:
+        if self.count <= MARKER_CAP:
+            return self.exact
+        markers = []
+        for (_, _), (first, seen) in sorted(self.binned.items()):
+            extra = f"\n(+{seen - 1} more of this kind nearby: downsampled)" if seen > 1 else ""
+            markers.append(Marker(first.t_ns, first.kind, first.tip + extra))
+        return sorted(markers, key=lambda m: (m.t_ns, MARKER_ORDER.get(m.kind, 9)))
+
+
+@dataclass(slots=True)
+class _Trace:
+    span: Span
+    exact: list[TracePoint] = field(default_factory=list)
+    binned: dict[int, tuple[tuple[int, TracePoint], tuple[int, TracePoint]]] = field(
+        default_factory=dict
+    )
+    count: int = 0
+
+    def add(self, t_ns: int, point: TracePoint) -> None:
+        self.count += 1
+        if self.count <= TRACE_CAP:
+            self.exact.append(point)
+        key = self.span.bin(t_ns, TRACE_BINS)
+        item = (self.count, point)
+        low, high = self.binned.get(key, (item, item))
+        self.binned[key] = (
+            item if point[1] < low[1][1] else low,
+            item if point[1] > high[1][1] else high,
+        )
+
+    def result(self) -> list[TracePoint]:
+        if self.count <= TRACE_CAP:
+            return self.exact
+        kept = {item for pair in self.binned.values() for item in pair}
+        return [point for _, point in sorted(kept)]
+
+
+@dataclass(slots=True)
+class Lane:
+    """One fault's row: final state, bands, markers, counter trace and near misses."""
+
+    fault: FaultSnapshot
+    bands: list[Band]
+    band_periods: int
+    markers: list[Marker]
+    marker_count: int
+    trace: list[TracePoint]
+    trace_count: int
+    near: list[NearMiss]
+    near_count: int
+
+
+def _kept_codes(faults: tuple[FaultSnapshot, ...]) -> set[str]:
+    if len(faults) <= ROW_CAP:
+        return {f.fault_code for f in faults}
+    ranked = sorted(faults, key=lambda f: (-STATUS_RANK.get(f.status, 0), -f.severity))
+    return {f.fault_code for f in ranked[:ROW_CAP]}
+
+
+def _band_tip(span: Span, start: int, end: int, status: str, cause: str, source: str | None) -> str:
+    origin = f" from {source}" if source else ""
+    return f"{status}  {span.label(start)} \u2013 {span.label(end)}\nentered by {cause}{origin}"
+
+
+def build_lanes(result: Result, span: Span) -> list[Lane]:
+    """The timeline rows, in fault-code order (at most ROW_CAP, the most serious kept)."""
+    kept = _kept_codes(result.faults)
+    bands = {code: _Bands(span) for code in kept}
+    markers = {code: _Markers(span) for code in kept}
+    traces = {code: _Trace(span) for code in kept}
+    open_bands: dict[str, tuple[int, str, str, str | None]] = {}
+    for tr in result.transitions:
+        if tr.fault_code not in kept:
+            continue
+        previous = open_bands.get(tr.fault_code)
+        if previous is not None:
+            start, status, cause, source = previous
+            tip = _band_tip(span, start, tr.t_ns, status, cause, source)
+            bands[tr.fault_code].add(Band(start, tr.t_ns, status, tip))
+        open_bands[tr.fault_code] = (tr.t_ns, tr.to_status, tr.cause, tr.source_id)
+    for code, (start, status, cause, source) in sorted(open_bands.items()):
+        end = max(span.end_ns, start)
+        bands[code].add(
+            Band(start, end, status, _band_tip(span, start, end, status, cause, source))
+        )
+    for event in result.events:
+        code = event.fault.fault_code
+        if code in kept:
+            auto = ", ".join(event.auto_cleared_codes)
+            tip = (
+                f"{event.event_type} at {span.label(event.t_ns)}\nstatus {event.fault.status}, "
+                f"severity {severity_name(event.fault.severity)}, "
+                f"occurrences {event.fault.occurrence_count}"
+                + (f"\nauto-cleared: {auto}" if auto else "")
+            )
+            markers[code].add(Marker(event.t_ns, event.event_type, tip))
+    for clear in result.clears:
+        if clear.fault_code in kept:
+            verdict = "succeeded" if clear.success else "failed"
+            tip = f"ClearFault at {span.label(clear.t_ns)}: {verdict}\n{clear.message}".rstrip()
+            markers[clear.fault_code].add(Marker(clear.t_ns, "clear", tip))
+    for report in result.reports:
+        if report.fault_code not in kept or not report.accepted:
+            continue
+        counter = report.debounce_counter
+        conf = report.confirmation_threshold
+        heal = report.healing_threshold
+        if counter is None or conf is None or heal is None:
+            continue
+        passed = 1 if report.event_type == "PASSED" else 0
+        status_index = STATUS_INDEX.get(report.status or "", -1)
+        point = (span.seconds(report.t_ns), counter, conf, heal, passed, status_index)
+        traces[report.fault_code].add(report.t_ns, point)
+    near: dict[str, list[NearMiss]] = {}
+    near_count: dict[str, int] = {}
+    for miss in result.near_misses:
+        if miss.fault_code in kept:
+            near_count[miss.fault_code] = near_count.get(miss.fault_code, 0) + 1
+            listed = near.setdefault(miss.fault_code, [])
+            if len(listed) < NEAR_CAP:
+                listed.append(miss)
+    return [
+        Lane(
+            fault=fault,
+            bands=bands[fault.fault_code].result(),
+            band_periods=bands[fault.fault_code].count,
+            markers=markers[fault.fault_code].result(),
+            marker_count=markers[fault.fault_code].count,
+            trace=traces[fault.fault_code].result(),
+            trace_count=traces[fault.fault_code].count,
+            near=near.get(fault.fault_code, []),
+            near_count=near_count.get(fault.fault_code, 0),
+        )
+        for fault in result.faults
+        if fault.fault_code in kept
+    ]
+
+
+def page_data(lanes: list[Lane], span: Span) -> dict[str, object]:
+    """What the page's script reads: the span, and per row its final state, trace, near misses."""
+    return {
+        "duration_s": span.seconds(span.end_ns),
+        "start_ns": str(span.start_ns),
+        "statuses": list(STATUSES),
+        "lanes": [
+            {
+                "code": lane.fault.fault_code,
+                "status": lane.fault.status,
+                "severity": severity_name(lane.fault.severity),
+                "description": lane.fault.description,
+                "sources": list(lane.fault.reporting_sources),
+                "occurrences": lane.fault.occurrence_count,
+                "first_s": span.seconds(lane.fault.first_occurred_ns),
+                "last_s": span.seconds(lane.fault.last_occurred_ns),
+                "last_passed_s": span.seconds(lane.fault.last_passed_ns)
+                if lane.fault.last_passed_ns
+                else None,
+                "muted_by": lane.fault.root_cause_code if lane.fault.muted else None,
+                "clusters": list(lane.fault.cluster_ids),
+                "trace": [list(p) for p in lane.trace],
+                "trace_count": lane.trace_count,
+                "near": [
+                    [
+                        span.seconds(n.t_ns),
+                        n.debounce_counter,
+                        n.confirmation_threshold,
+                        severity_name(n.severity),
+                        n.source_id,
+                        n.resulting_status,
+                    ]
+                    for n in lane.near
+                ],
+                "near_count": lane.near_count,
+            }
+            for lane in lanes
+        ],
+    }
