@@ -2,6 +2,7 @@
 
 Usage:
     python benchmarks/bench_recording.py [--size-gb 1.0] [--out DIR] [--seed 1] [--repeat 3]
+    python benchmarks/bench_recording.py --mission-hour [--out DIR] [--repeat 2]
     python benchmarks/bench_recording.py --memory [--small-gb 0.2] [--large-gb 2.0] [--out DIR]
     python benchmarks/bench_recording.py --size-gb 0.2 --profile
 
@@ -15,8 +16,15 @@ message at a time, and is deterministic for a seed.
 Throughput mode prints messages per second over the read topics for (a) rosbags reading them
 raw, (b) rosbags reading and deserializing them, (c) ``medkit_replay.replay`` end to end with
 the log bridge on, (d) a straightforward pipeline (rosbags AnyReader + deserialize + our
-bridges and engine, no spooling), and the ratios c/a, c/b, c/d. Each is run ``--repeat`` times
-and the fastest wall time is kept (other work on the machine only ever slows a run down).
+bridges and engine, no spooling), and the ratios c/a, c/b, c/d against the targets (c/a >= 0.5,
+aiming at 1.0; c/d >= 5), then (r) ``replay(reference=True)``, the reference path the fast path
+must equal (rosbags decoding, whole chunks, request and record objects), and c/r. Each is run
+``--repeat`` times and the fastest wall time is kept (other work on the machine only ever slows
+a run down).
+
+Mission mode writes a one-hour mission (10 Hz DiagnosticArrays of 20 statuses, 5 action
+servers, 50 rosout lines per second, 5 GB of 15 Hz camera frames), streaming, and measures
+(a), (b) and (c) on it: (c) must run at least 500 times faster than real time.
 
 Memory mode runs ``/usr/bin/time -v python -m medkit_replay.cli analyze BAG --quiet --json
 /dev/null --config PARAMS`` on a small and a large recording of the same topic mix and prints
@@ -59,6 +67,7 @@ from rosbags.typesys.stores.ros2_jazzy import (
     diagnostic_msgs__msg__DiagnosticStatus as DiagnosticStatus,
     diagnostic_msgs__msg__KeyValue as KeyValue,
     rcl_interfaces__msg__Log as Log,
+    sensor_msgs__msg__CompressedImage as CompressedImage,
     sensor_msgs__msg__Image as Image,
     std_msgs__msg__Header as Header,
     unique_identifier_msgs__msg__UUID as UUID,
@@ -257,11 +266,11 @@ def _action(seed: int, profile: ActionProfile) -> Iterator[Event]:
         t_ns = end_ns + int(rng.uniform(*profile.gap_s) * 1e9)
 
 
-def _rosout(seed: int) -> Iterator[Event]:
+def _rosout(seed: int, hz: int = ROSOUT_HZ) -> Iterator[Event]:
     """Log lines at ~50 Hz from five nodes: mostly INFO, some WARN, a few ERROR."""
     store = base_typestore()
     rng = random.Random(f"{seed}/rosout")
-    period = 10**9 // ROSOUT_HZ
+    period = 10**9 // hz
     t_ns = T0_NS + 1_000_000
     n = 0
     while True:
@@ -386,7 +395,13 @@ def rosbags_deserialize(bag: Path, _params: Path) -> int:
 
 def medkit_analyze(bag: Path, params: Path) -> int:
     """(c) ``medkit-replay analyze`` minus writing outputs: the whole pipeline."""
-    return replay([bag], [params]).summary.messages_read
+    return replay([bag], [params], reference=False).summary.messages_read
+
+
+def medkit_reference(bag: Path, params: Path) -> int:
+    """(r) As (c) on the reference path (``MEDKIT_REPLAY_REFERENCE=1``): rosbags decoding,
+    whole chunks, request and record objects, as analyze ran before the fast path."""
+    return replay([bag], [params], reference=True).summary.messages_read
 
 
 def straightforward(bag: Path, params: Path) -> int:
@@ -472,14 +487,16 @@ def throughput(bag: Path, params: Path, repeat: int, with_straightforward: bool)
     ]
     if with_straightforward:
         runs.append(("(d) AnyReader + deserialize + bridges/engine", straightforward))
+    runs.append(("(r) analyze on the reference path", medkit_reference))
     results = [measure(label, run, bag, params, repeat) for label, run in runs]
+    reference = results.pop()
     print(f"\nbest of {repeat}, {results[0].messages:,} messages on the read topics:")
     for m in results:
         print(
             f"  {m.label:<44} {m.rate:>10,.0f} msgs/s  {m.wall_s:7.2f} s wall  "
             f"{m.cpu_s:7.2f} s cpu  {size / 1e6 / m.wall_s:6.0f} MB/s of recording"
         )
-    if len({m.messages for m in results}) != 1:
+    if len({m.messages for m in [*results, reference]}) != 1:
         print("  WARNING: the readers did not read the same number of messages")
     a, b, c = results[0], results[1], results[2]
     print(f"  c/a = {c.rate / a.rate:.2f}   c/b = {c.rate / b.rate:.2f}", end="")
@@ -490,10 +507,182 @@ def throughput(bag: Path, params: Path, repeat: int, with_straightforward: bool)
     if with_straightforward:
         print(f"   c/d = {results[3].cpu_s / c.cpu_s:.2f}", end="")
     print("   (the same by CPU time, less sensitive to other load on the machine)")
+    print(
+        f"  c/r = {c.rate / reference.rate:.2f}   (the fast path against the reference path, "
+        f"{reference.wall_s:.2f} s wall)"
+    )
+    print(
+        f"  target c/a >= 0.5 (aim 1.0): {'met' if c.rate >= 0.5 * a.rate else 'NOT met'}", end=""
+    )
+    if with_straightforward:
+        met = c.rate >= 5 * results[3].rate
+        print(f"   target c/d >= 5: {'met' if met else 'NOT met'}", end="")
+    print()
     rss, wall = peak_rss(bag, params)
     print(
         f"  (c) as a CLI in a fresh process (/usr/bin/time): {wall:.2f} s wall including start-up "
         f"({c.messages / wall:,.0f} msgs/s), peak RSS {rss / 1024:.0f} MB"
+    )
+
+
+# -- the one-hour mission ----------------------------------------------------------------------
+
+MISSION_S = 3600
+MISSION_CAMERA_BYTES = 5 * 10**9
+MISSION_CAMERA_HZ = 15
+MISSION_DIAGNOSTICS_HZ = 10
+MISSION_ROSOUT_HZ = 50
+MISSION_COMPONENTS = (
+    ("camera_front", "/sensors/camera_front"),
+    ("camera_rear", "/sensors/camera_rear"),
+    ("lidar_top", "/sensors/lidar_top"),
+    ("imu", "/sensors/imu"),
+    ("gps", "/sensors/gps"),
+    ("motor_left", "/powertrain/motor_left"),
+    ("motor_right", "/powertrain/motor_right"),
+    ("battery", "/power/battery"),
+    ("charger", "/power/charger"),
+    ("wifi", "/comms/wifi"),
+)
+MISSION_CHECKS = (("Status", "Degraded"), ("Rate", "Rate below expected"))
+MISSION_ACTIONS = (
+    *ACTIONS,
+    ActionProfile("/spin", (20.0, 60.0), (2.0, 6.0), 0.10, 0.05),
+    ActionProfile("/dock_robot", (120.0, 300.0), (10.0, 30.0), 0.20, 0.0),
+)
+
+
+def _mission_camera(seed: int) -> Iterator[Event]:
+    """JPEG-sized incompressible frames at 15 Hz: 5 GB over the hour."""
+    store = base_typestore()
+    rng = np.random.default_rng(seed)
+    size = MISSION_CAMERA_BYTES // (MISSION_CAMERA_HZ * MISSION_S)
+    frames = [rng.integers(0, 256, size, dtype=np.uint8) for _ in range(4)]
+    period = 10**9 // MISSION_CAMERA_HZ
+    k = 0
+    while True:
+        t_ns = T0_NS + 3_000_000 + k * period
+        image = CompressedImage(
+            header=Header(stamp=_time(t_ns), frame_id="camera_front"),
+            format="jpeg",
+            data=frames[k % len(frames)],
+        )
+        yield (
+            t_ns,
+            IMAGE_TOPIC + "/compressed",
+            store.serialize_cdr(image, CompressedImage.__msgtype__),
+        )
+        k += 1
+
+
+def _mission_diagnostics(seed: int) -> Iterator[Event]:
+    """One DiagnosticArray of 20 statuses (10 components, 2 checks each) at 10 Hz."""
+    store = base_typestore()
+    rng = random.Random(f"{seed}/mission-diagnostics")
+    sources = [
+        (f"{component}: {check}", hardware_id, problem)
+        for component, hardware_id in MISSION_COMPONENTS
+        for check, problem in MISSION_CHECKS
+    ]
+    episodes = [_Episodes(rng, mean_gap_s=300.0) for _ in sources]
+    period = 10**9 // MISSION_DIAGNOSTICS_HZ
+    k = 0
+    while True:
+        t_ns = T0_NS + k * period
+        statuses = []
+        for (name, hardware_id, problem), episode in zip(sources, episodes, strict=True):
+            level = episode.level_at(t_ns)
+            statuses.append(
+                DiagnosticStatus(
+                    level=level,
+                    name=name,
+                    message="OK" if level == LEVEL_OK else problem,
+                    hardware_id=hardware_id,
+                    values=[
+                        KeyValue(key="value", value=f"{rng.gauss(50.0, 5.0):.2f}"),
+                        KeyValue(key="samples", value=str(k)),
+                    ],
+                )
+            )
+        array = DiagnosticArray(header=Header(stamp=_time(t_ns), frame_id=""), status=statuses)
+        yield t_ns, DIAGNOSTICS_TOPIC, store.serialize_cdr(array, DiagnosticArray.__msgtype__)
+        k += 1
+
+
+def generate_mission(path: Path, seed: int) -> None:
+    """Write the one-hour mission (rosbag2 directory, MCAP storage, uncompressed), streaming."""
+    store = base_typestore()
+    streams = [
+        _mission_camera(seed),
+        _mission_diagnostics(seed),
+        _rosout(seed, MISSION_ROSOUT_HZ),
+        *(_action(seed, profile) for profile in MISSION_ACTIONS),
+    ]
+    types = {
+        IMAGE_TOPIC + "/compressed": CompressedImage.__msgtype__,
+        DIAGNOSTICS_TOPIC: DiagnosticArray.__msgtype__,
+        ROSOUT_TOPIC: Log.__msgtype__,
+        **{p.name + ACTION_SUFFIX: GoalStatusArray.__msgtype__ for p in MISSION_ACTIONS},
+    }
+    end_ns = T0_NS + MISSION_S * 10**9
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connections = {
+            topic: writer.add_connection(topic, msgtype, typestore=store)
+            for topic, msgtype in types.items()
+        }
+        for t_ns, topic, payload in heapq.merge(*streams, key=_event_time):
+            if t_ns >= end_ns:
+                break
+            writer.write(connections[topic], t_ns, payload)
+
+
+def mission_recording(root: Path, seed: int) -> Path:
+    """The one-hour mission under ``root``: reused if complete, else written."""
+    path, marker = root / f"mission_hour_seed{seed}", root / f"mission_hour_seed{seed}.json"
+    stamp = {"generator": GENERATOR_VERSION, "mission_s": MISSION_S, "seed": seed}
+    if path.is_dir() and marker.is_file() and json.loads(marker.read_text()) == stamp:
+        print(f"reusing {path} ({disk_size(path) / 1e9:.2f} GB)")
+        return path
+    marker.unlink(missing_ok=True)
+    if path.exists():
+        shutil.rmtree(path)
+    print(f"generating {path} (one hour, seed {seed}) ...", flush=True)
+    start = time.perf_counter()
+    generate_mission(path, seed)
+    marker.write_text(json.dumps(stamp))
+    elapsed = time.perf_counter() - start
+    size = disk_size(path)
+    print(f"  wrote {size / 1e9:.2f} GB in {elapsed:.1f} s ({size / 1e6 / elapsed:.0f} MB/s)")
+    return path
+
+
+def mission_hour(root: Path, params: Path, repeat: int, seed: int) -> None:
+    """Analyse the one-hour mission: how much faster than real time, next to rosbags' read."""
+    bag = mission_recording(root, seed)
+    size = disk_size(bag)
+    print(f"recording: {bag} ({size / 1e9:.2f} GB, {MISSION_S} s of bag time)")
+    runs: list[tuple[str, Callable[[Path, Path], int]]] = [
+        ("(a) rosbags Reader, raw", rosbags_raw),
+        ("(b) rosbags Reader + deserialize_cdr", rosbags_deserialize),
+        ("(c) medkit_replay analyze (replay())", medkit_analyze),
+    ]
+    results = [measure(label, run, bag, params, repeat) for label, run in runs]
+    a, b, c = results
+    print(f"\nbest of {repeat}, {c.messages:,} messages on the read topics:")
+    for m in results:
+        print(
+            f"  {m.label:<44} {m.rate:>10,.0f} msgs/s  {m.wall_s:7.2f} s wall  "
+            f"{m.cpu_s:7.2f} s cpu  {MISSION_S / m.wall_s:6.0f}x real time"
+        )
+    print(f"  c/a = {c.rate / a.rate:.2f}   c/b = {c.rate / b.rate:.2f}   (by wall time)")
+    verdict = "met" if MISSION_S / c.wall_s >= 500 else "NOT met"
+    print(
+        f"  analyze: {MISSION_S / c.wall_s:.0f}x faster than real time (target >= 500x: {verdict})"
+    )
+    rss, wall = peak_rss(bag, params, json_report=False)
+    print(
+        f"  (c) as a CLI in a fresh process (/usr/bin/time, no --json): {wall:.2f} s wall "
+        f"including start-up ({MISSION_S / wall:.0f}x real time), peak RSS {rss / 1024:.0f} MB"
     )
 
 
@@ -508,8 +697,9 @@ def time_binary() -> str:
     return binary
 
 
-def peak_rss(bag: Path, params: Path) -> tuple[int, float]:
+def peak_rss(bag: Path, params: Path, *, json_report: bool = True) -> tuple[int, float]:
     """Peak RSS (kB) and wall time (s) of ``analyze`` on ``bag`` in a fresh process."""
+    report = ["--json", "/dev/null"] if json_report else []
     command = [
         time_binary(),
         "-v",
@@ -519,8 +709,7 @@ def peak_rss(bag: Path, params: Path) -> tuple[int, float]:
         "analyze",
         str(bag),
         "--quiet",
-        "--json",
-        "/dev/null",
+        *report,
         "--config",
         str(params),
     ]
@@ -602,6 +791,11 @@ def main() -> None:
     parser.add_argument("--small-gb", type=float, default=0.2)
     parser.add_argument("--large-gb", type=float, default=2.0)
     parser.add_argument("--profile", action="store_true", help="cProfile analyze instead")
+    parser.add_argument(
+        "--mission-hour",
+        action="store_true",
+        help="the one-hour mission (10 Hz x 20 statuses, 5 actions, 50 rosout/s, 5 GB camera)",
+    )
     parser.add_argument("--top", type=int, default=25, help="functions listed by --profile")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-recording-") as tmp:
@@ -609,7 +803,9 @@ def main() -> None:
         root.mkdir(parents=True, exist_ok=True)
         params = Path(tmp) / "params.yaml"
         params.write_text(PARAMS)
-        if args.memory:
+        if args.mission_hour:
+            mission_hour(root, params, max(args.repeat, 1), args.seed)
+        elif args.memory:
             memory(root, params, (args.small_gb, args.large_gb), args.seed)
         elif args.profile:
             profile(recording(root, args.size_gb, args.seed), params, args.top)

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from enum import IntEnum
-from typing import TYPE_CHECKING, Literal, Protocol, TypeVar
+from operator import attrgetter
+from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar
 
 if TYPE_CHECKING:
-    from collections.abc import Iterator
+    from collections.abc import Callable, Iterator
 
 Origin = Literal[
     "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
@@ -42,6 +43,44 @@ def spoolable(cls: type[_R]) -> type[_R]:
 
     cls.__reduce__ = reduce  # type: ignore[method-assign,assignment]
     return cls
+
+
+class RecordRows(Generic[_R]):
+    """A record class's row form for spools: its fields in declaration order, as one flat tuple.
+
+    A nested record (a FaultEvent's snapshot) has its fields spliced in where it stands (flat
+    rows pickle faster). The engine's hot path builds rows directly; ``decode`` rebuilds the
+    record when a spool is read. ``names`` are the row's fields, nested ones included.
+    """
+
+    def __init__(
+        self, cls: type[_R], nested: tuple[str, RecordRows[FaultSnapshot]] | None = None
+    ) -> None:
+        self.cls = cls
+        self.fields: tuple[str, ...] = tuple(f.name for f in fields(cls))  # type: ignore[arg-type]
+        self._get: Callable[[_R], tuple[object, ...]] = attrgetter(*self.fields)
+        self._nested: tuple[int, RecordRows[FaultSnapshot]] | None = None
+        self.names = self.fields
+        if nested is not None:
+            at = self.fields.index(nested[0])
+            self._nested = (at, nested[1])
+            self.names = (*self.fields[:at], *nested[1].names, *self.fields[at + 1 :])
+
+    def encode(self, item: _R, /) -> tuple[object, ...]:
+        """The record's row."""
+        row = self._get(item)
+        if self._nested is None:
+            return row
+        at, rows = self._nested
+        return (*row[:at], *rows.encode(row[at]), *row[at + 1 :])  # type: ignore[arg-type]
+
+    def decode(self, row: tuple[object, ...], /) -> _R:
+        """The record a row stands for."""
+        if self._nested is not None:
+            at, rows = self._nested
+            end = at + len(rows.names)
+            row = (*row[:at], rows.decode(row[at:end]), *row[end:])
+        return _restore(self.cls, self.fields, row)
 
 
 NS_PER_SEC = 1_000_000_000
@@ -175,6 +214,13 @@ class ClearRecord:
     success: bool
     message: str
     auto_cleared_codes: tuple[str, ...]
+
+
+SNAPSHOT_ROWS = RecordRows(FaultSnapshot)
+EVENT_ROWS = RecordRows(FaultEvent, ("fault", SNAPSHOT_ROWS))
+TRANSITION_ROWS = RecordRows(Transition)
+REPORT_ROWS = RecordRows(ReportRecord)
+CLEAR_ROWS = RecordRows(ClearRecord)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

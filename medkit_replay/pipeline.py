@@ -5,7 +5,9 @@ The only place the layers meet (besides the CLI, which calls this).
 
 from __future__ import annotations
 
+import os
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
@@ -21,8 +23,12 @@ from medkit_replay.config.replay_options import ReplayOptions, replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
-from medkit_replay.inputs import open_recording
+from medkit_replay.inputs import Message, open_recording
 from medkit_replay.model import (
+    CLEAR_ROWS,
+    EVENT_ROWS,
+    REPORT_ROWS,
+    TRANSITION_ROWS,
     ClearRecord,
     ClearRequest,
     EngineOutput,
@@ -44,15 +50,30 @@ from medkit_replay.spool import Spool
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Sequence
+    from collections.abc import Iterable, Sequence
 
-    from medkit_replay.inputs import Message, Recording
+    from medkit_replay.bridges.base import ReportSink
+    from medkit_replay.inputs import Recording
+    from medkit_replay.model import Origin
 
 Request = ReportRequest | ClearRequest
+_Handler = Callable[[int, str, object, "ReportSink"], None]
 _BRIDGE_ORIGINS = ("diagnostic_bridge", "action_status_bridge", "log_bridge")
 
 PROGRESS_EVERY = 2048
 """Messages read between two calls of a replay's ``progress`` callback (by default)."""
+
+SETTLE_EVERY = 1024
+"""Messages between two spills of the records the fast path piled up (bounds memory)."""
+
+REFERENCE_ENV = "MEDKIT_REPLAY_REFERENCE"
+"""Set to 1 to make every replay take the reference path (see :func:`replay`)."""
+
+
+def reference_by_default() -> bool:
+    """Whether ``MEDKIT_REPLAY_REFERENCE`` asks for the reference path."""
+    return os.environ.get(REFERENCE_ENV, "").strip().lower() not in ("", "0", "false", "no")
+
 
 Phase = Literal["prescan", "replay"]
 """``prescan``: the pass over recorded ReportFault calls only; ``replay``: the replay itself."""
@@ -151,9 +172,25 @@ class _Router:
             return self.log.on_message(t_ns, topic, msg)
         return ()
 
+    def handler(self, role: str, topic: str, msgtype: str) -> _Handler | None:
+        """The bridge's fast entry for messages of this role, topic and type, if it has one.
+
+        The choice :meth:`requests` makes, made once: None leaves the message to it.
+        """
+        if role == "diagnostics" and self.diagnostic.wants(topic, msgtype):
+            return self.diagnostic.feed
+        if role == "rosout" and self.log is not None and self.log.wants(topic, msgtype):
+            return self.log.feed
+        if role == "action_status":
+            return self.action.feed
+        return None
+
 
 def _recorded_report_codes(
-    inputs: Sequence[Path], progress: Callable[[Progress], None] | None, every: int
+    inputs: Sequence[Path],
+    progress: Callable[[Progress], None] | None,
+    every: int,
+    reference: bool,
 ) -> set[str]:
     """Fault codes present in recorded ReportFault traffic (a pre-pass over those topics only)."""
     services = ServiceCallReplayer()
@@ -161,7 +198,9 @@ def _recorded_report_codes(
     bags = [p for p in inputs if p.suffix != ".jsonl"]
     if not bags:
         return codes
-    with open_recording(bags, only_roles=("report_fault",)) as recording:
+    with open_recording(
+        bags, only_roles=("report_fault",), light=not reference, reference=reference
+    ) as recording:
         meter = _Meter(progress, "prescan", recording, every) if progress is not None else None
         next_at = meter.next_at if meter is not None else 0
         messages = 0
@@ -187,6 +226,7 @@ def replay(
     *,
     progress: Callable[[Progress], None] | None = None,
     progress_every: int = PROGRESS_EVERY,
+    reference: bool | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -198,6 +238,10 @@ def replay(
             (``done``). Passes: ``prescan`` (recorded ReportFault calls; bags only), then
             ``replay``. The result does not depend on it; what it raises propagates.
         progress_every: messages between two calls.
+        reference: take the reference path: rosbags decodes every message, MCAP chunks are
+            read whole, bridges return request objects and the manager records objects. The
+            default (None) is the fast path unless ``MEDKIT_REPLAY_REFERENCE=1`` is set; both
+            give the same result, byte for byte.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -211,50 +255,45 @@ def replay(
     options, option_warnings = replay_options(params)
     warnings += option_warnings
 
-    events: Spool[FaultEvent] = Spool()
-    transitions: Spool[Transition] = Spool()
-    reports: Spool[ReportRecord] = Spool()
-    clears: Spool[ClearRecord] = Spool()
+    if reference is None:
+        reference = reference_by_default()
+    fast = not reference
+    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS if fast else None)
+    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS if fast else None)
+    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS if fast else None)
+    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS if fast else None)
     output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
     manager = FaultManager(manager_config, output)
+    if fast:  # rows straight into the spools' tails; the loop settles them now and then
+        manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
     timeline = Timeline(manager)
     router = _Router(options)
-    recorded_codes = _recorded_report_codes(paths, progress, progress_every)
-    withheld: Counter[str] = Counter()
-    withheld_codes: dict[str, set[str]] = {}
+    recorded_codes = _recorded_report_codes(paths, progress, progress_every, reference)
+    gate = _Gate(timeline, recorded_codes)
     rosout = router.log is not None
     rosout_topic = router.log.topic if router.log is not None else "/rosout"
-    messages = 0
     with open_recording(
         paths,
         rosout=rosout,
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
+        light=fast,
+        reference=reference,
     ) as recording:
         meter = (
             _Meter(progress, "replay", recording, progress_every) if progress is not None else None
         )
-        next_at = meter.next_at if meter is not None else 0  # 0: never reached
-        for message in recording.messages():
-            messages += 1
-            if messages == next_at and meter is not None:
-                meter.tick(messages, message.t_ns)
-                next_at = meter.next_at
-            timeline.advance(message.t_ns)
-            for request in router.requests(message):
-                if request.origin in _BRIDGE_ORIGINS and request.fault_code in recorded_codes:
-                    withheld[request.origin] += 1
-                    withheld_codes.setdefault(request.origin, set()).add(request.fault_code)
-                    continue
-                timeline.apply(request)
+        loop = _reference_loop if reference else _fast_loop
+        messages = loop(recording, meter, timeline, router, gate)
         warnings += recording.warnings
         summaries = recording.inputs
         if meter is not None:
             meter.finish(messages, timeline.last_ns)
-    for origin, count in sorted(withheld.items()):
+    for origin, count in sorted(gate.withheld.items()):
+        codes = len(gate.withheld_codes[origin])
         warnings.append(
             f"double counting avoided: {count} request(s) of the simulated {origin} for "
-            f"{len(withheld_codes[origin])} code(s) also in recorded ReportFault traffic were not "
+            f"{codes} code(s) also in recorded ReportFault traffic were not "
             "applied; the recorded calls were (rule: recorded service traffic wins per fault code)"
         )
     for topic, count in sorted(router.services.metadata_only.items()):
@@ -295,6 +334,123 @@ def replay(
         (events, transitions, reports, clears),
         config,
     )
+
+
+class _Gate:
+    """The double-counting rule between bridges and the manager: recorded service traffic wins.
+
+    A bridge's request for a code also present in recorded ReportFault calls is withheld.
+    """
+
+    def __init__(self, timeline: Timeline, recorded_codes: set[str]) -> None:
+        self.timeline = timeline
+        self.recorded_codes = recorded_codes
+        self.withheld: Counter[str] = Counter()
+        self.withheld_codes: dict[str, set[str]] = {}
+        report_fields = timeline.manager.report_fields
+        self.report: ReportSink = self._report_gated if recorded_codes else report_fields
+        self._report_fields = report_fields
+
+    def _withhold(self, origin: str, fault_code: str) -> None:
+        self.withheld[origin] += 1
+        self.withheld_codes.setdefault(origin, set()).add(fault_code)
+
+    def apply(self, request: Request) -> None:
+        """One request object, as the reference loop hands them over."""
+        if request.origin in _BRIDGE_ORIGINS and request.fault_code in self.recorded_codes:
+            self._withhold(request.origin, request.fault_code)
+            return
+        self.timeline.apply(request)
+
+    def apply_fast(self, request: Request) -> None:
+        """:meth:`apply`, a report going to the manager field by field."""
+        if request.origin in _BRIDGE_ORIGINS and request.fault_code in self.recorded_codes:
+            self._withhold(request.origin, request.fault_code)
+        elif isinstance(request, ReportRequest):
+            self._report_fields(
+                request.t_ns, request.origin, request.topic, request.fault_code,
+                request.event_type, request.severity, request.description, request.source_id,
+            )  # fmt: skip
+        else:
+            self.timeline.apply(request)
+
+    def _report_gated(
+        self,
+        t_ns: int,
+        origin: Origin,
+        topic: str | None,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+        source_id: str,
+    ) -> None:
+        # Only bridges report through here.
+        if fault_code in self.recorded_codes:
+            self._withhold(origin, fault_code)
+            return
+        self._report_fields(
+            t_ns, origin, topic, fault_code, event_type, severity, description, source_id
+        )
+
+
+def _reference_loop(
+    recording: Recording, meter: _Meter | None, timeline: Timeline, router: _Router, gate: _Gate
+) -> int:
+    """The reference path: request objects from the bridges, applied one by one."""
+    messages = 0
+    next_at = meter.next_at if meter is not None else 0  # 0: never reached
+    for message in recording.messages():
+        messages += 1
+        if messages == next_at and meter is not None:
+            meter.tick(messages, message.t_ns)
+            next_at = meter.next_at
+        timeline.advance(message.t_ns)
+        for request in router.requests(message):
+            gate.apply(request)
+    return messages
+
+
+def _fast_loop(
+    recording: Recording, meter: _Meter | None, timeline: Timeline, router: _Router, gate: _Gate
+) -> int:
+    """The fast path: bridges report field by field, the manager records rows."""
+    messages = 0
+    next_at = meter.next_at if meter is not None else 0  # 0: never reached
+    settle_at = SETTLE_EVERY
+    output = timeline.manager.output
+    logs = (output.reports, output.events, output.transitions)
+    spools = [log for log in logs if isinstance(log, Spool)]
+    report, apply = gate.report, gate.apply_fast
+    handlers: dict[tuple[str, str, str], _Handler | None] = {}
+    due = timeline.due_ns()
+    t_ns: int | None = None
+    for t_ns, input_index, topic, msgtype, role, msg in recording.message_tuples():
+        messages += 1
+        if messages == next_at and meter is not None:
+            meter.tick(messages, t_ns)
+            next_at = meter.next_at
+        if messages == settle_at:
+            settle_at += SETTLE_EVERY
+            for spool in spools:
+                spool.settle()
+        if t_ns >= due:
+            timeline.advance(t_ns)
+            due = timeline.due_ns()
+        key = (role, topic, msgtype)
+        try:
+            handler = handlers[key]
+        except KeyError:
+            handler = handlers[key] = router.handler(role, topic, msgtype)
+        if handler is not None:
+            handler(t_ns, topic, msg, report)
+        else:
+            message = Message(t_ns, input_index, topic, msgtype, role, msg)
+            for request in router.requests(message):
+                apply(request)
+    if t_ns is not None:
+        timeline.last_ns = t_ns  # what each advance(t) before the due time would have noted
+    return messages
 
 
 def _result(

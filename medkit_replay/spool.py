@@ -1,83 +1,157 @@
 """An append-only record sequence that spills full chunks to an anonymous temporary file.
 
 Keeps a replay's memory bounded by the chunk size however many records a recording yields.
+With a row codec, records may also be appended as flat tuples (cheap to build, pickle and
+count), as the replay's hot path does: a row becomes its record when first read, and stays that
+record while it is held in memory, as an appended record does.
 """
 
 from __future__ import annotations
 
 import pickle
 import tempfile
-from collections.abc import Iterator, Sequence
-from typing import IO, Generic, TypeVar, overload
+from bisect import bisect_right
+from collections.abc import Callable, Iterator, Sequence
+from typing import IO, Generic, Protocol, TypeVar, overload
 
 T = TypeVar("T")
 DEFAULT_CHUNK = 16384
+
+Row = tuple[object, ...]
+
+
+class RowCodec(Protocol[T]):
+    """A record type's flat form: ``decode(encode(record)) == record``."""
+
+    def encode(self, item: T, /) -> Row:
+        """The record as a tuple."""
+        ...
+
+    def decode(self, row: Row, /) -> T:
+        """The record a tuple stands for."""
+        ...
 
 
 class Spool(Sequence[T], Generic[T]):
     """A list-like sequence of records; all but the newest chunk live on disk.
 
     The temporary file is unnamed (deleted as soon as it is created on POSIX) and lives in
-    the system's temporary directory, never beside an input.
+    the system's temporary directory, never beside an input. Not to be read while records
+    are still being appended.
     """
 
-    def __init__(self, chunk_size: int | None = None) -> None:
+    def __init__(self, chunk_size: int | None = None, *, codec: RowCodec[T] | None = None) -> None:
         self._chunk_size = max(chunk_size or DEFAULT_CHUNK, 1)
-        self._tail: list[T] = []
-        self._offsets: list[tuple[int, int]] = []  # (file offset, byte length) per chunk
+        self._codec = codec
+        self._tail: list[object] = []  # records, and rows with a codec; never replaced
+        self._chunks: list[tuple[int, int]] = []  # (file offset, byte length) per spilled chunk
+        self._starts: list[int] = []  # index of each spilled chunk's first record
+        self._spilled = 0
         self._file: IO[bytes] | None = None
-        self._length = 0
-        self._cache: tuple[int, list[T]] | None = None
+        self._cache: tuple[int, list[object]] | None = None
 
     def append(self, item: T) -> None:
         """Add a record at the end."""
         self._tail.append(item)
-        self._length += 1
+        if len(self._tail) >= self._chunk_size:
+            self._spill()
+
+    def append_row(self, row: Row) -> None:
+        """Add a record given in its row form (only with a codec)."""
+        assert self._codec is not None
+        self._tail.append(row)
+        if len(self._tail) >= self._chunk_size:
+            self._spill()
+
+    def row_sink(self) -> Callable[[Row], None]:
+        """The fastest way to add rows: the tail's own ``append``, with no size check.
+
+        Whoever appends through it calls :meth:`settle` now and then, which spills what has
+        piled up; memory stays bounded by how often it does.
+        """
+        assert self._codec is not None
+        return self._tail.append
+
+    def settle(self) -> None:
+        """Spill the records in memory if they fill a chunk."""
         if len(self._tail) >= self._chunk_size:
             self._spill()
 
     def _spill(self) -> None:
         if self._file is None:
             self._file = tempfile.TemporaryFile(prefix="medkit-replay-")  # noqa: SIM115  # closed in close()
-        data = pickle.dumps(self._tail, protocol=pickle.HIGHEST_PROTOCOL)
+        tail = self._tail
+        if self._codec is not None:
+            encode = self._codec.encode
+            tail = [x if type(x) is tuple else encode(x) for x in tail]  # type: ignore[arg-type]
+        data = pickle.dumps(tail, protocol=pickle.HIGHEST_PROTOCOL)
         self._file.seek(0, 2)
-        self._offsets.append((self._file.tell(), len(data)))
+        self._chunks.append((self._file.tell(), len(data)))
+        self._starts.append(self._spilled)
         self._file.write(data)
-        self._tail = []
+        self._spilled += len(self._tail)
+        self._tail.clear()  # in place: row_sink() hands out its append
 
-    def _chunk(self, index: int) -> list[T]:
+    def _chunk(self, index: int) -> list[object]:
         if self._cache is not None and self._cache[0] == index:
             return self._cache[1]
         assert self._file is not None
-        offset, size = self._offsets[index]
+        offset, size = self._chunks[index]
         self._file.seek(offset)
-        chunk: list[T] = pickle.loads(self._file.read(size))  # our own file
+        chunk: list[object] = pickle.loads(self._file.read(size))  # our own file
         self._cache = (index, chunk)
         return chunk
 
+    def _records(self, items: list[object]) -> Iterator[T]:
+        """The records of a chunk or the tail; rows are replaced by their records as read."""
+        codec = self._codec
+        if codec is None:
+            yield from items  # type: ignore[misc]  # records, without a codec
+            return
+        for index, item in enumerate(items):
+            if type(item) is tuple:
+                item = items[index] = codec.decode(item)
+            yield item  # type: ignore[misc]  # a record
+
+    def rows(self) -> Iterator[Row]:
+        """The records in their row form, in order (only with a codec)."""
+        codec = self._codec
+        assert codec is not None
+        for index in range(len(self._chunks)):
+            for item in self._chunk(index):
+                yield item if type(item) is tuple else codec.encode(item)  # type: ignore[arg-type]
+        for item in self._tail:
+            yield item if type(item) is tuple else codec.encode(item)  # type: ignore[arg-type]
+
     def __len__(self) -> int:
-        return self._length
+        return self._spilled + len(self._tail)
 
     def __iter__(self) -> Iterator[T]:
-        for index in range(len(self._offsets)):
-            yield from self._chunk(index)
-        yield from self._tail
+        for index in range(len(self._chunks)):
+            yield from self._records(self._chunk(index))
+        yield from self._records(self._tail)
 
     @overload
     def __getitem__(self, index: int) -> T: ...
     @overload
     def __getitem__(self, index: slice) -> Sequence[T]: ...
     def __getitem__(self, index: int | slice) -> T | Sequence[T]:
+        length = len(self)
         if isinstance(index, slice):
-            return [self[i] for i in range(*index.indices(self._length))]
+            return [self[i] for i in range(*index.indices(length))]
         if index < 0:
-            index += self._length
-        if not 0 <= index < self._length:
+            index += length
+        if not 0 <= index < length:
             raise IndexError(index)
-        spilled = len(self._offsets) * self._chunk_size
-        if index >= spilled:
-            return self._tail[index - spilled]
-        return self._chunk(index // self._chunk_size)[index % self._chunk_size]
+        if index >= self._spilled:
+            items, at = self._tail, index - self._spilled
+        else:
+            chunk = bisect_right(self._starts, index) - 1
+            items, at = self._chunk(chunk), index - self._starts[chunk]
+        item = items[at]
+        if self._codec is not None and type(item) is tuple:
+            item = items[at] = self._codec.decode(item)
+        return item  # type: ignore[return-value]  # a record
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, Sequence) and not isinstance(other, str):

@@ -9,7 +9,7 @@ import enum
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
-from medkit_replay.bridges.base import FaultReporter, passes_lists
+from medkit_replay.bridges.base import FaultReporter, forward, passes_lists
 from medkit_replay.bridges.codes import action_code_prefix, action_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.parameters import INT32_MAX, ParameterReader
@@ -17,6 +17,7 @@ from medkit_replay.parameters import INT32_MAX, ParameterReader
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
 
+    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.model import Origin, ReportRequest
 
 NODE_NAME = "action_status_bridge"
@@ -243,6 +244,10 @@ class ActionStatusBridge:
             # Without healing a success leaves the desired state alone: a failure stays failed.
             state.desired = NetState.HEALTHY
         return self._reconcile(t_ns, state, action)
+
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """:meth:`on_message`, each request handed to ``report`` (status arrays are rare)."""
+        forward(self.on_message(t_ns, topic, msg), report)
 
     def watched_actions(self) -> list[str]:
         """Names of the actions seen so far, sorted."""

@@ -17,6 +17,24 @@ if TYPE_CHECKING:
     from medkit_replay.model import Origin
 
 
+class ReportSink(Protocol):
+    """Takes one forwarded ReportFault request field by field (``FaultManager.report_fields``)."""
+
+    def __call__(
+        self,
+        t_ns: int,
+        origin: Origin,
+        topic: str | None,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+        source_id: str,
+        /,
+    ) -> None:
+        """Handle the request."""
+
+
 class Bridge(Protocol):
     """A live bridge node replayed offline: decoded messages in, ReportFault requests out."""
 
@@ -37,6 +55,22 @@ class Bridge(Protocol):
     def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
         """Feed one message (received at bag time ``t_ns``); return what the node would send."""
         ...
+
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """:meth:`on_message` handing each request to ``report`` instead (the replay's hot path).
+
+        Same requests in the same order; a bridge may skip building request objects.
+        """
+        ...
+
+
+def forward(requests: Iterable[ReportRequest], report: ReportSink) -> None:
+    """Hand built requests to a sink, field by field."""
+    for r in requests:
+        report(
+            r.t_ns, r.origin, r.topic, r.fault_code, r.event_type, r.severity, r.description,
+            r.source_id,
+        )  # fmt: skip
 
 
 class FaultReporter:
@@ -101,6 +135,7 @@ class ReporterCache:
         self._filter_config = filter_config
         self._origin: Origin = origin
         self._reporters: OrderedDict[str, FaultReporter] = OrderedDict()
+        self._last: tuple[str, FaultReporter] | None = None  # the most recently used
 
     def __len__(self) -> int:
         return len(self._reporters)
@@ -110,14 +145,18 @@ class ReporterCache:
 
     def get(self, source_id: str) -> FaultReporter:
         """The reporter for ``source_id``, created on first use; a lookup refreshes its recency."""
+        last = self._last
+        if last is not None and last[0] == source_id:
+            return last[1]  # already the most recent: refreshing it changes nothing
         reporter = self._reporters.get(source_id)
         if reporter is not None:
             self._reporters.move_to_end(source_id)
-            return reporter
-        reporter = FaultReporter(source_id, self._filter_config, origin=self._origin)
-        self._reporters[source_id] = reporter
-        if len(self._reporters) > self.capacity:
-            self._reporters.popitem(last=False)
+        else:
+            reporter = FaultReporter(source_id, self._filter_config, origin=self._origin)
+            self._reporters[source_id] = reporter
+            if len(self._reporters) > self.capacity:
+                self._reporters.popitem(last=False)  # never the one just added
+        self._last = (source_id, reporter)
         return reporter
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
-from medkit_replay.bridges.base import ReporterCache, resolve_topic
+from medkit_replay.bridges.base import ReporterCache, forward, resolve_topic
 from medkit_replay.bridges.codes import upper_snake
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import Severity
@@ -17,6 +17,7 @@ from medkit_replay.parameters import INT32_MAX, ParameterReader
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
+    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.model import Origin, ReportRequest
 
 NODE_NAME = "diagnostic_bridge"
@@ -26,6 +27,12 @@ LEVEL_WARN = 1
 LEVEL_ERROR = 2
 LEVEL_STALE = 3
 _NAME_TO_CODE = "name_to_code."
+_MAX_PLANS = 4096
+
+Head = tuple[int, str, str, str]
+"""A status as the bridge reads it without ``keyvalue_codes``: level, name, message, hardware_id."""
+Plan = tuple[str, str, "int | None", str]
+"""What a head comes to: fault code (``""``: skipped), source_id, severity (None: PASSED), text."""
 
 
 class KeyValueLike(Protocol):
@@ -130,6 +137,7 @@ class DiagnosticBridge:
         self.reporters = ReporterCache(
             self.config.max_tracked_sources, self.config.local_filter, origin=self.origin
         )
+        self._plans: dict[Head, Plan] = {}
 
     def wants(self, topic: str, msgtype: str) -> bool:
         """The configured diagnostics topic, when it carries DiagnosticArray."""
@@ -175,3 +183,49 @@ class DiagnosticBridge:
             if report is not None:
                 out.append(report)
         return out
+
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """:meth:`on_message` for the replay's hot path: no request objects, one plan per head.
+
+        Without ``keyvalue_codes`` a status's code, source and severity depend only on its
+        level, name, message and hardware_id, so they are worked out once per distinct head
+        (a light DiagnosticArray hands the heads over without building status objects).
+        """
+        if self.config.keyvalue_codes:
+            forward(self.on_message(t_ns, topic, msg), report)
+            return
+        heads: list[Head] | None = getattr(msg, "heads", None)
+        if heads is None:
+            heads = [
+                (s.level, s.name, s.message, s.hardware_id)
+                for s in cast("DiagnosticArrayLike", msg).status
+            ]
+        plans, reporters, origin = self._plans, self.reporters, self.origin
+        for head in heads:
+            plan = plans.get(head)
+            if plan is None:
+                plan = self._plan(head)
+                if len(plans) >= _MAX_PLANS:
+                    plans.clear()
+                plans[head] = plan
+            code, source_id, severity, message = plan
+            if not code:
+                continue
+            local_filter = reporters.get(source_id).local_filter
+            if severity is None:
+                if local_filter.should_forward_passed(code, t_ns):
+                    report(t_ns, origin, topic, code, 1, 0, "", source_id)
+            elif local_filter.should_forward(code, severity, t_ns):
+                report(t_ns, origin, topic, code, 0, severity, message, source_id)
+
+    def _plan(self, head: Head) -> Plan:
+        level, name, message, hardware_id = head
+        code = self.config.name_to_code.get(name)
+        if code is None:
+            code = upper_snake(name) if self.config.auto_generate_codes else ""
+        source_id = (
+            hardware_id
+            if self.config.use_hardware_id_as_source_id and "/" in hardware_id
+            else self.node_fqn
+        )
+        return code, source_id, map_to_severity(level), message

@@ -9,7 +9,13 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
-from medkit_replay.bridges.base import ReporterCache, any_substring, passes_lists, resolve_topic
+from medkit_replay.bridges.base import (
+    ReporterCache,
+    any_substring,
+    forward,
+    passes_lists,
+    resolve_topic,
+)
 from medkit_replay.bridges.codes import log_code_prefix, log_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import NS_PER_SEC, Severity
@@ -18,6 +24,7 @@ from medkit_replay.parameters import INT32_MAX, ParameterReader
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
+    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.model import Origin, ReportRequest
 
 NODE_NAME = "log_bridge"
@@ -190,3 +197,13 @@ class LogBridge:
             return []
         report = self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg)
         return [] if report is None else [report]
+
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """:meth:`on_message` for the replay's hot path: below the floor, nothing is looked at.
+
+        The checks before the level's in :meth:`on_message` change no state, so a line whose
+        level maps to no severity is dropped first, whatever its node.
+        """
+        level = cast("LogLike", msg).level
+        if map_level_to_severity(level, self.config.severity_floor) is not None:
+            forward(self.on_message(t_ns, topic, msg), report)

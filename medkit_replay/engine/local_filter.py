@@ -61,7 +61,18 @@ class LocalFilter:
         """PASSED path: its own tracker, same threshold and window, no bypass."""
         if not self._config.enabled:
             return True
-        return self._track(self._passed, fault_code, t_ns)
+        # _track, inlined: this runs for every OK diagnostic status.
+        times = self._passed.get(fault_code)
+        if times is None:
+            times = self._passed[fault_code] = deque()
+        cutoff = t_ns - self._window_ns
+        while times and times[0] < cutoff:
+            times.popleft()
+        times.append(t_ns)
+        threshold = self._config.default_threshold
+        if len(times) > threshold:
+            times.popleft()
+        return len(times) >= threshold
 
     def reset(self, fault_code: str) -> None:
         """Forget both trackers of one code."""

@@ -6,15 +6,18 @@ Pure: consumes timestamped requests and ticks, appends records to an EngineOutpu
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeAlias, TypeVar
 
 from medkit_replay.engine.correlation.engine import CorrelationEngine, severity_name
-from medkit_replay.engine.debounce import DebounceConfig, sanitize
+from medkit_replay.engine.debounce import DebounceConfig, compute_status, sanitize
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
 from medkit_replay.engine.thresholds import EntityOverride, EntityThresholdResolver
 from medkit_replay.engine.validation import fault_code_error, report_error
 from medkit_replay.model import (
+    EVENT_ROWS,
     NS_PER_SEC,
+    REPORT_ROWS,
+    TRANSITION_ROWS,
     Cause,
     ClearRecord,
     ClearRequest,
@@ -30,9 +33,76 @@ from medkit_replay.model import (
 )
 
 if TYPE_CHECKING:
-    from medkit_replay.engine.correlation.rules import CorrelationConfig
+    from collections.abc import Callable
 
+    from medkit_replay.engine.correlation.rules import CorrelationConfig
+    from medkit_replay.model import Origin, RecordLog, RecordRows
+
+_T = TypeVar("_T")
 _EVENT_NAMES = {0: "FAILED", 1: "PASSED"}
+_MAX_CACHED_SOURCES = 65536
+
+Row = tuple[object, ...]
+if TYPE_CHECKING:
+    FieldsReporter: TypeAlias = Callable[[int, Origin, str | None, str, int, int, str, str], None]
+
+# report_fields builds these rows positionally: a record class that changes must change it too.
+if REPORT_ROWS.names != (
+    "t_ns",
+    "origin",
+    "topic",
+    "fault_code",
+    "event_type",
+    "severity",
+    "description",
+    "source_id",
+    "accepted",
+    "reject_reason",
+    "status",
+    "debounce_counter",
+    "confirmation_threshold",
+    "healing_threshold",
+    "withheld_event",
+) or EVENT_ROWS.names != (
+    "t_ns",
+    "event_type",
+    "fault_code",
+    "severity",
+    "description",
+    "first_occurred_ns",
+    "last_occurred_ns",
+    "last_passed_ns",
+    "occurrence_count",
+    "status",
+    "reporting_sources",
+    "muted",
+    "root_cause_code",
+    "cluster_ids",
+    "auto_cleared_codes",
+):
+    raise ImportError("ReportRecord or FaultEvent changed: update FaultManager.report_fields")
+if TRANSITION_ROWS.names != (
+    "t_ns",
+    "fault_code",
+    "from_status",
+    "to_status",
+    "cause",
+    "source_id",
+):
+    raise ImportError("Transition changed: update FaultManager.report_fields")
+
+
+def _row_sink(log: RecordLog[_T], rows: RecordRows[_T]) -> Callable[[Row], None]:
+    """Appends rows to a log: directly to a spool that takes rows, else as rebuilt records."""
+    append_row: Callable[[Row], None] | None = getattr(log, "append_row", None)
+    if append_row is not None:
+        return append_row
+    decode, append = rows.decode, log.append
+
+    def sink(row: Row) -> None:
+        append(decode(row))
+
+    return sink
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -60,6 +130,19 @@ class FaultManager:
             if config.correlation is not None and config.correlation.enabled
             else None
         )
+        self._configs: dict[str, DebounceConfig] = {}  # sanitised config per source_id
+        self._valid_codes: set[str] = set()  # codes validation accepts
+        # Where report_fields puts its records (set_row_sinks swaps in faster ones).
+        self.report_row = _row_sink(self.output.reports, REPORT_ROWS)
+        self.event_row = _row_sink(self.output.events, EVENT_ROWS)
+        self.transition_row = _row_sink(self.output.transitions, TRANSITION_ROWS)
+        self.report_fields: FieldsReporter = self._fields_reporter()
+        """:meth:`report` for a request given field by field, its records appended as rows.
+
+        The replay's hot path: no request object, no record objects (a spool that takes rows
+        stores them as they are). Same state changes and records as :meth:`report`, which
+        handles the rare requests validation rejects.
+        """
 
     # -- ReportFault -----------------------------------------------------------------------
 
@@ -117,6 +200,175 @@ class FaultManager:
         if not outcome.is_new and outcome.before != "HEALED" and after == "HEALED":
             self._event(request.t_ns, "fault_cleared", fault)
         return True
+
+    def set_row_sinks(
+        self,
+        report: Callable[[Row], None],
+        event: Callable[[Row], None],
+        transition: Callable[[Row], None],
+    ) -> None:
+        """Where :attr:`report_fields` puts its rows (e.g. a spool's ``row_sink``)."""
+        self.report_row, self.event_row, self.transition_row = report, event, transition
+        self.report_fields = self._fields_reporter()
+
+    def _fields_reporter(self) -> FieldsReporter:
+        """Build :attr:`report_fields` with what it reads bound as locals (it runs per status)."""
+        valid_codes, configs, output = self._valid_codes, self._configs, self.output
+        faults, storage, resolver, correlation = (
+            self.storage.faults,
+            self.storage,
+            self.resolver,
+            self.correlation,
+        )
+        report_row, event_row, transition_row = self.report_row, self.event_row, self.transition_row
+        counts, event_rows, count_event = output.event_counts, self._event_rows, self._count_event
+
+        def report_fields(
+            t_ns: int,
+            origin: Origin,
+            topic: str | None,
+            fault_code: str,
+            event_type: int,
+            severity: int,
+            description: str,
+            source_id: str,
+        ) -> None:
+            if fault_code in valid_codes:
+                rejected = not source_id or (
+                    event_type != 1 and (event_type != 0 or severity > 3)
+                )  # report_error's other checks
+            else:
+                rejected = report_error(fault_code, event_type, severity, source_id) is not None
+                if not rejected and len(valid_codes) < _MAX_CACHED_SOURCES:
+                    valid_codes.add(fault_code)
+            if rejected:
+                self.report(
+                    ReportRequest(
+                        t_ns=t_ns,
+                        fault_code=fault_code,
+                        event_type=event_type,
+                        severity=severity,
+                        description=description,
+                        source_id=source_id,
+                        origin=origin,
+                        topic=topic,
+                    )
+                )
+                return
+            config = configs.get(source_id)
+            if config is None:
+                config = sanitize(resolver.resolve(source_id))
+                if len(configs) < _MAX_CACHED_SOURCES:
+                    configs[source_id] = config
+            output.reports_accepted += 1
+            conf, heal = config.confirmation_threshold, config.healing_threshold
+            fault = faults.get(fault_code)
+            if event_type == 1:
+                if fault is None or fault.status == "CLEARED":
+                    # Nothing changes (storage.report leaves both alone); only the record.
+                    report_row(
+                        (t_ns, origin, topic, fault_code, "PASSED", severity, description,
+                         source_id, True, None, None if fault is None else "CLEARED",
+                         None if fault is None else fault.counter, conf, heal, None)
+                    )  # fmt: skip
+                    return
+                before: Status | None = fault.status
+                counter = fault.counter
+                counter = conf if counter < conf else heal if counter > heal else counter
+                counter += 1
+                counter = conf if counter < conf else heal if counter > heal else counter
+                fault.last_passed_ns = t_ns
+                fault.counter = counter
+                after = compute_status(counter, before, config)
+                assert after is not None  # an existing fault always has a status to keep
+                fault.status = after
+                report_row(
+                    (t_ns, origin, topic, fault_code, "PASSED", severity, description,
+                     source_id, True, None, after, counter, conf, heal, None)
+                )  # fmt: skip
+                if after == before:
+                    if after == "CONFIRMED":  # the common case: a PASSED on a confirmed fault
+                        counts["fault_updated"] = counts.get("fault_updated", 0) + 1
+                        if correlation is None:
+                            event_row(
+                                (t_ns, "fault_updated", fault_code, fault.severity,
+                                 fault.description, fault.first_occurred_ns,
+                                 fault.last_occurred_ns, t_ns, fault.occurrence_count, after,
+                                 fault.sorted_sources(), False, None, (), ())
+                            )  # fmt: skip
+                        else:
+                            event_row(event_rows(t_ns, "fault_updated", fault))
+                    return
+                transition_row((t_ns, fault_code, before, after, "report", source_id))
+                if after == "CONFIRMED":
+                    kind: EventKind = (
+                        "fault_updated" if before == "CONFIRMED" else "fault_confirmed"
+                    )
+                    count_event(kind)
+                    event_row(event_rows(t_ns, kind, fault))
+                if before != "HEALED" and after == "HEALED":
+                    count_event("fault_cleared")
+                    event_row(event_rows(t_ns, "fault_cleared", fault))
+                return
+            outcome = storage.report(
+                fault_code, event_type, severity, description, source_id, t_ns, config
+            )
+            fault = faults[fault_code]
+            before, after, is_new = outcome.before, outcome.after, outcome.is_new
+            assert after is not None  # a FAILED always leaves a status
+            muted = False
+            if correlation is not None:
+                result = correlation.process_fault(fault_code, severity_name(severity), t_ns)
+                muted = result.should_mute
+                if result.retroactive_mute_codes:
+                    output.retroactive_mutes.append(
+                        RetroactiveMute(
+                            t_ns=t_ns,
+                            cluster_id=result.cluster_id,
+                            fault_codes=result.retroactive_mute_codes,
+                        )
+                    )
+            if before != after:
+                transition_row((t_ns, fault_code, before, after, "report", source_id))
+            kind_or_none: EventKind | None = None
+            withheld: EventKind | None = None
+            if after == "CONFIRMED":
+                kind_or_none = (
+                    "fault_updated" if not is_new and before == "CONFIRMED" else "fault_confirmed"
+                )
+                if muted:
+                    withheld, kind_or_none = kind_or_none, None
+            report_row(
+                (t_ns, origin, topic, fault_code, "FAILED", severity, description, source_id,
+                 True, None, fault.status, fault.counter, conf, heal, withheld)
+            )  # fmt: skip
+            if kind_or_none is not None:
+                count_event(kind_or_none)
+                event_row(event_rows(t_ns, kind_or_none, fault))
+            if not is_new and before != "HEALED" and after == "HEALED":
+                count_event("fault_cleared")
+                event_row(event_rows(t_ns, "fault_cleared", fault))
+
+        return report_fields
+
+    def _count_event(self, kind: EventKind) -> None:
+        counts = self.output.event_counts
+        counts[kind] = counts.get(kind, 0) + 1
+
+    def _event_rows(self, t_ns: int, kind: EventKind, fault: FaultRecord) -> Row:
+        """:meth:`_event`'s record as a row (a report's events never auto-clear others)."""
+        code = fault.fault_code
+        if self.correlation is not None:
+            entry = self.correlation.muted_entry(code)
+            muted, root = entry is not None, entry.root_cause_code if entry is not None else None
+            clusters = self.correlation.cluster_ids_of(code)
+        else:
+            muted, root, clusters = False, None, ()
+        return (
+            t_ns, kind, code, fault.severity, fault.description, fault.first_occurred_ns,
+            fault.last_occurred_ns, fault.last_passed_ns, fault.occurrence_count, fault.status,
+            fault.sorted_sources(), muted, root, clusters, (),
+        )  # fmt: skip
 
     # -- ClearFault ------------------------------------------------------------------------
 

@@ -51,6 +51,20 @@ class Timeline:
             self.manager.cleanup_tick(last)
             self._next_cleanup_ns = last + self._cleanup_period_ns
 
+    def due_ns(self) -> int:
+        """The earliest message time at which :meth:`advance` has more to do than noting it.
+
+        Before that, ``advance(t)`` only sets ``last_ns = t``; a caller may do just that.
+        """
+        if self.t0_ns is None:
+            return -(2**63)
+        due = 2**63
+        if self.manager.config.auto_confirm_after_ns > 0:
+            due = self._next_confirm_ns
+        if self.manager.correlation is not None:
+            due = min(due, self._next_cleanup_ns)
+        return due
+
     def apply(self, request: ReportRequest | ClearRequest) -> None:
         """Hand one request to the manager (after :meth:`advance` for its message)."""
         if isinstance(request, ReportRequest):

@@ -132,7 +132,7 @@ class Db3File:
 
     def read(
         self, wants: Callable[[Connection], bool], cap_ns: int | None
-    ) -> Iterator[Bound | Timed[Raw]]:
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         """Yield bounds and wanted messages (see ``StorageFile.read``)."""
         ids = [cid for cid, connection in self.connections.items() if wants(connection)]
         if not ids:

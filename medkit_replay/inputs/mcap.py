@@ -1,12 +1,19 @@
 """MCAP storage files: a streaming reader that uses the chunk index when intact, else scans.
 
 Read-only and bounded: a length field is obeyed only within the file and RECORD_SIZE_LIMIT.
+Uncompressed chunks without a checksum are read through their message indexes when that skips
+most of their bytes (only the wanted records are read); anything irregular falls back to reading
+the whole chunk, so what is delivered never depends on the route taken.
 """
 
 from __future__ import annotations
 
 import os
 from binascii import crc32
+from contextlib import suppress
+from functools import cache
+from operator import itemgetter, sub
+from struct import Struct
 from typing import TYPE_CHECKING, BinaryIO, NamedTuple
 
 from rosbags.rosbag2.storage_mcap import decompress
@@ -18,6 +25,7 @@ from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
+    from io import FileIO
     from pathlib import Path
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -30,8 +38,35 @@ OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = (
     0x06,
 )
 OP_CHUNK_INDEX, OP_STATISTICS, OP_DATA_END = 0x08, 0x0B, 0x0F
+OP_MESSAGE_INDEX = 0x07
 FOOTER_SIZE = 9 + 20 + len(MAGIC)
 MESSAGE_HEADER = 22  # channel id, sequence, log time, publish time
+PAYLOAD_AT = 9 + MESSAGE_HEADER  # a message record's payload, from the record's first byte
+PLAIN_CHUNK_HEAD = 9 + 8 + 8 + 8 + 4 + 4 + 8  # an uncompressed chunk's bytes before its records
+SKIP_AT_LEAST = 16 * 1024
+"""An unwanted record this long is skipped when reading by index (only its header is read)."""
+
+PREFETCH = 4
+"""Chunks ahead whose heads and message indexes are requested from the kernel while reading."""
+_prefetch = getattr(os, "posix_fadvise", None)  # not on every platform
+_WILLNEED = getattr(os, "POSIX_FADV_WILLNEED", 3)
+_NOWAIT = getattr(os, "RWF_NOWAIT", 0)
+_preadv = getattr(os, "preadv", None) if _NOWAIT else None
+
+_CHUNK_HEAD = Struct("<BQQQQII")  # opcode, length, start, end, size, crc, compression length
+_U64 = Struct("<Q")
+_MESSAGE_HEAD = Struct("<BQHIQ")  # opcode, length, channel id, sequence, log time
+_RECORD_HEAD = Struct("<BQH")  # opcode, length, channel id (of a message record)
+_INDEX_HEAD = Struct("<BQHI")  # opcode, length, channel id, entries' byte length
+_INDEX_ENTRY = Struct("<QQ")  # log time, offset in the chunk's records
+_ORDER = itemgetter(0, 1)  # (log time, position) of a Timed
+_new = tuple.__new__  # builds a Timed or Raw from a tuple without its Python-level __new__
+
+
+@cache
+def _u64s(count: int) -> Callable[[bytes, int], tuple[int, ...]]:
+    """Unpacks ``count`` little-endian uint64 values in one call."""
+    return Struct(f"<{count}Q").unpack_from
 
 
 class _DamageError(Exception):
@@ -68,6 +103,26 @@ class _ChunkIndex(NamedTuple):
     offset: int
     length: int
     channels: frozenset[int]
+    index_length: int = 0  # bytes of message index records after the chunk (0: unknown)
+
+
+_CHUNK_INDEX_HEAD = Struct("<QQQQI")  # start, end, chunk offset, chunk length, map length
+_CHUNK_INDEX_ENTRY = Struct("<HQ")  # channel id, message index offset
+
+
+def _chunk_index(body: memoryview) -> _ChunkIndex | None:
+    """A well-formed chunk index record, parsed in one go; None for the careful parser."""
+    if len(body) < _CHUNK_INDEX_HEAD.size:
+        return None
+    start_ns, _, offset, length, map_length = _CHUNK_INDEX_HEAD.unpack_from(body)
+    end = _CHUNK_INDEX_HEAD.size + map_length
+    if end > len(body) or map_length % _CHUNK_INDEX_ENTRY.size:
+        return None
+    channels = frozenset(
+        cid for cid, _ in _CHUNK_INDEX_ENTRY.iter_unpack(body[_CHUNK_INDEX_HEAD.size : end])
+    )
+    index_length = _U64.unpack_from(body, end)[0] if end + 8 <= len(body) else 0
+    return _ChunkIndex(start_ns, offset, length, channels, index_length)
 
 
 class McapFile:
@@ -75,10 +130,15 @@ class McapFile:
 
     storage = "mcap"
 
-    def __init__(self, path: Path, file_no: int, warn: Callable[[str], None]) -> None:
+    def __init__(
+        self, path: Path, file_no: int, warn: Callable[[str], None], *, indexed: bool = True
+    ) -> None:
         self.path = path
         self.file_no = file_no
         self.warn = warn
+        self.indexed = indexed  # False: always read whole chunks (the reference route)
+        self._buffer = bytearray()
+        self._cold = True  # the chunk being read comes from the disk, not the page cache
         self.connections: dict[int, Connection] = {}
         self.counts: dict[int, int] = {}
         self.start_ns: int | None = None
@@ -166,6 +226,8 @@ class McapFile:
                 self._add_schema(record)
             elif op == OP_CHANNEL:
                 self._add_channel(record)
+            elif op == OP_CHUNK_INDEX and (fast := _chunk_index(record.data)) is not None:
+                indexes.append(fast)
             elif op == OP_CHUNK_INDEX:
                 start_ns, _, offset, length = (record.uint(8) for _ in range(4))
                 offsets = _Cursor(record.take(record.uint(4)))
@@ -173,7 +235,13 @@ class McapFile:
                 while offsets.pos < len(offsets.data):
                     channels.append(offsets.uint(2))
                     offsets.uint(8)
-                indexes.append(_ChunkIndex(start_ns, offset, length, frozenset(channels)))
+                try:
+                    index_length = record.uint(8)
+                except _DamageError:
+                    index_length = 0  # only an optimisation is lost
+                indexes.append(
+                    _ChunkIndex(start_ns, offset, length, frozenset(channels), index_length)
+                )
             elif op == OP_STATISTICS:
                 record.take(8 + 2 + 4 * 3)  # message, schema, channel, attachment, metadata counts
                 chunk_count = record.uint(4)
@@ -208,16 +276,17 @@ class McapFile:
 
     def read(
         self, wants: Callable[[Connection], bool], cap_ns: int | None
-    ) -> Iterator[Bound | Timed[Raw]]:
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         """Yield bounds and wanted messages (see ``StorageFile.read``)."""
         self._accept = wants
         cap = cap_ns if cap_ns is not None else 2**63
         for cid in sorted(self.connections):
             self._wants(cid)  # every declared topic is classified, read or not
-        with self.path.open("rb") as bio:
-            if self._chunks is not None:
-                yield from self._read_indexed(bio, cap)
-            else:
+        if self._chunks is not None:
+            with self.path.open("rb", buffering=0) as raw:
+                yield from self._read_indexed(raw, cap)
+        else:
+            with self.path.open("rb") as bio:
                 yield from self._read_linear(bio, cap)
         if self._unknown_channels:
             self.warn(
@@ -231,13 +300,19 @@ class McapFile:
             self._wanted[cid] = connection is not None and self._accept(connection)
         return self._wanted[cid]
 
-    def _read_indexed(self, bio: BinaryIO, cap: int) -> Iterator[Bound | Timed[Raw]]:
-        for chunk in self._chunks or ():
+    def _read_indexed(
+        self, bio: FileIO, cap: int
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
+        chunks = self._chunks or []
+        ahead = 0  # chunks whose head and index are asked for already
+        for number, chunk in enumerate(chunks):
             if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
                 continue  # no wanted topic in it: its bytes are never read
+            if self.indexed and self._cold:  # the last chunk came from the disk: ask ahead
+                ahead = self._prefetch_heads(bio, chunks, max(ahead, number), number + PREFETCH)
             bio.seek(chunk.offset)
-            head = bio.read(9)
-            length = int.from_bytes(head[1:], "little") if len(head) == 9 else -1
+            head = bio.read(PLAIN_CHUNK_HEAD)
+            length = int.from_bytes(head[1:9], "little") if len(head) >= 9 else -1
             if (
                 head[:1] != bytes([OP_CHUNK])
                 or 9 + length != chunk.length
@@ -249,9 +324,184 @@ class McapFile:
                 )
                 continue
             yield Bound(min(chunk.start_ns, cap))
-            yield from self._chunk(memoryview(bio.read(length)), chunk.offset, cap, count=False)
+            timed = None
+            if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
+                timed = self._by_index(bio, chunk, head)
+            if timed is None:
+                body = self._read_into_buffer(bio, chunk.offset + 9, length)
+                yield from self._chunk(body, chunk.offset, cap, count=False)
+            elif timed:
+                timed.sort(key=_ORDER)
+                yield Bound(min(timed[0].t_ns, cap))
+                yield timed
 
-    def _read_linear(self, bio: BinaryIO, cap: int) -> Iterator[Bound | Timed[Raw]]:
+    def _cached(self, bio: FileIO, offset: int, length: int) -> bytes | None:
+        """``length`` bytes at ``offset`` if the page cache holds them (no wait), else None.
+
+        None also where the system cannot tell (no RWF_NOWAIT); the caller then reads as
+        usual and hints what it will read next (:meth:`_hint`), which a cached file does
+        not need.
+        """
+        if _preadv is None or _prefetch is None:
+            return None
+        buffer = bytearray(length)
+        try:
+            got = _preadv(bio.fileno(), [buffer], offset, _NOWAIT)
+        except OSError:  # BlockingIOError: not cached; others: not supported here
+            return None
+        if got != length and offset + got < self._size:
+            return None  # partly cached: read it as usual
+        return bytes(buffer[:got])
+
+    def _prefetch_heads(self, bio: FileIO, chunks: list[_ChunkIndex], start: int, stop: int) -> int:
+        """Ask the kernel for the heads and message indexes of chunks ``start:stop`` (no wait).
+
+        Reading by index is many small reads; from a cold disk each would wait its turn, so
+        the next chunks' small parts are requested ahead while this one is decoded. A hint
+        only: ranges outside the file are not asked for, and a refusal is ignored.
+        """
+        for chunk in chunks[start:stop]:
+            if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
+                continue
+            self._hint(bio, chunk.offset, PLAIN_CHUNK_HEAD)
+            if chunk.index_length:
+                self._hint(bio, chunk.offset + chunk.length, chunk.index_length)
+        return max(start, min(stop, len(chunks)))
+
+    def _hint(self, bio: FileIO, offset: int, length: int) -> None:
+        """Tell the kernel these bytes will be read soon (when it takes such hints)."""
+        if _prefetch is not None and offset >= 0 and 0 < length <= self._size - offset:
+            with suppress(OSError):
+                _prefetch(bio.fileno(), offset, length, _WILLNEED)
+
+    def _read_into_buffer(self, bio: FileIO, offset: int, length: int) -> memoryview:
+        """``length`` bytes at ``offset`` (fewer at the end of the file) in the reused buffer.
+
+        The view is valid until the next call; whatever must outlive it is copied out.
+        """
+        if len(self._buffer) < length:
+            self._buffer = bytearray(length)  # a new one: views of the old stay valid
+        view = memoryview(self._buffer)[:length]
+        bio.seek(offset)
+        done = 0
+        while done < length:
+            got = bio.readinto(view[done:])
+            if not got:
+                break
+            done += got
+        return view[:done]
+
+    def _by_index(self, bio: FileIO, chunk: _ChunkIndex, head: bytes) -> list[Timed[Raw]] | None:
+        """The wanted messages of an uncompressed chunk, read through its message indexes.
+
+        Only the wanted records and the headers of the skipped ones are read. None when that
+        does not pay (most of the chunk is wanted) or anything is irregular: a compressed or
+        checksummed chunk, an index that does not tile the chunk's records exactly with
+        message records, a skipped record of a wanted channel. The whole chunk is then read,
+        so both routes deliver the same messages.
+        """
+        _, length, _, _, size, crc, compression = _CHUNK_HEAD.unpack_from(head)
+        if compression or crc or size > RECORD_SIZE_LIMIT:
+            return None
+        if _U64.unpack_from(head, PLAIN_CHUNK_HEAD - 8)[0] != size or 40 + size > length:
+            return None
+        index_at = chunk.offset + chunk.length
+        if index_at + chunk.index_length > self._data_end:
+            return None
+        bio.seek(index_at)
+        index = bio.read(chunk.index_length)
+        total = len(index)
+        keys: list[int] = []  # offset << 16 | channel id, per message record
+        at = 0
+        while at < total:
+            if at + _INDEX_HEAD.size > total:
+                return None
+            op, record_length, cid, entries_length = _INDEX_HEAD.unpack_from(index, at)
+            end = at + 9 + record_length
+            if (
+                op != OP_MESSAGE_INDEX
+                or record_length != 6 + entries_length
+                or entries_length % _INDEX_ENTRY.size
+                or end > total
+            ):
+                return None
+            if entries_length:
+                words = _u64s(entries_length >> 3)(index, at + _INDEX_HEAD.size)
+                keys += [offset << 16 | cid for offset in words[1::2]]  # (log time, offset)
+            at = end
+        if not keys or total != chunk.index_length:
+            return None
+        keys.sort()
+        starts = [key >> 16 for key in keys]
+        if starts[0] != 0:
+            return None  # something other than a message comes first: not ours to skip
+        channels = [key & 0xFFFF for key in keys]
+        ends = [*starts[1:], size]
+        extents = list(map(sub, ends, starts))
+        if min(extents) < PAYLOAD_AT:
+            return None
+        wanted = self._wanted
+        flags = [wanted[cid] if cid in wanted else self._wants(cid) for cid in channels]
+        skipped = [
+            k for k, extent in enumerate(extents) if extent >= SKIP_AT_LEAST and not flags[k]
+        ]
+        skipped_bytes = sum(extents[k] - _RECORD_HEAD.size for k in skipped)
+        if 2 * (size - skipped_bytes) > size:
+            return None  # reading the whole chunk costs about the same
+        pieces: list[tuple[int, int]] = []  # [start, end) in the records: all but skipped bodies
+        at = 0
+        for k in skipped:
+            pieces.append((at, starts[k] + _RECORD_HEAD.size))
+            at = ends[k]
+        if at < size:
+            pieces.append((at, size))
+        base = chunk.offset + PLAIN_CHUNK_HEAD
+        first = self._cached(bio, base + pieces[0][0], pieces[0][1] - pieces[0][0])
+        self._cold = first is None
+        if self._cold and len(pieces) > 1:  # from the disk: all pieces in flight at once
+            for start, stop in pieces[1:]:
+                self._hint(bio, base + start, stop - start)
+        timed: list[Timed[Raw]] = []
+        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
+        connections, file_no, pos = self.connections, self.file_no, chunk.offset
+        k, count = 0, len(starts)
+        for start, stop in pieces:
+            if first is not None:
+                data, first = first, None
+            else:
+                bio.seek(base + start)
+                data = bio.read(stop - start)
+            if len(data) != stop - start:
+                return None
+            while k < count and starts[k] < stop:
+                inner, end = starts[k], ends[k]
+                at = inner - start
+                if end <= stop:
+                    op, record_length, cid, _, t_ns = unpack_message(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9:
+                        return None
+                    if flags[k] if cid == channels[k] else self._wants(cid):
+                        payload = data[at + PAYLOAD_AT : at + 9 + record_length]
+                        timed.append(
+                            _new(
+                                Timed,
+                                (
+                                    t_ns,
+                                    (file_no, pos, inner),
+                                    _new(Raw, (connections[cid], payload)),
+                                ),
+                            )
+                        )
+                else:
+                    op, record_length, cid = unpack_head(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
+                        return None
+                k += 1
+        return timed
+
+    def _read_linear(
+        self, bio: BinaryIO, cap: int
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         pos, end = self._data_start, self._data_end
         bio.seek(pos)
         while pos < end:
@@ -321,7 +571,7 @@ class McapFile:
 
     def _chunk(
         self, body: memoryview, pos: int, cap: int, count: bool, partial: bool = False
-    ) -> Iterator[Bound | Timed[Raw]]:
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         """Decompress one chunk and yield its wanted messages sorted by (log time, offset)."""
         where = f"{self.path}: chunk at byte {pos}"
         try:
@@ -340,20 +590,54 @@ class McapFile:
             self.warn(f"{where} ({span}) claims {size} bytes uncompressed; skipped as damaged")
             return
         try:
-            records = (
-                data if partial else memoryview(decompress(bytes(data), compression, size, crc))
-            )
+            if partial or (not compression and len(data) == size and not crc):
+                records = data  # what decompress would return, without copying it
+            else:
+                records = memoryview(decompress(bytes(data), compression, size, crc))
         except Exception as exc:  # rosbags' ReaderError, or the codec's own error
             self.warn(f"{where} ({span}) cannot be decompressed ({exc}); its messages are lost")
             return
-        timed, problem = self._chunk_records(records, pos, count)
+        fast = None if partial else self._plain_records(records, pos, count)
+        timed, problem = (
+            (fast, None) if fast is not None else self._chunk_records(records, pos, count)
+        )
         if problem or partial:
             what = "cut off" if partial else problem
             self.warn(f"{where} ({span}): {what}; kept {len(timed)} messages")
-        timed.sort(key=lambda item: (item.t_ns, item.position))
+        timed.sort(key=_ORDER)
         if timed:
             yield Bound(min(timed[0].t_ns, cap))
-            yield from timed
+            yield timed
+
+    def _plain_records(self, records: memoryview, pos: int, count: bool) -> list[Timed[Raw]] | None:
+        """:meth:`_chunk_records` for the common case: message records only, all intact.
+
+        None at the first record that is not (damage, a schema or channel inside the chunk):
+        the careful parser then reads the chunk from its start.
+        """
+        timed: list[Timed[Raw]] = []
+        seen: list[tuple[int, int]] = []
+        size = len(records)
+        unpack = _MESSAGE_HEAD.unpack_from
+        wants, connections, file_no = self._wants, self.connections, self.file_no
+        at = 0
+        while at < size:
+            if at + _MESSAGE_HEAD.size > size:
+                return None
+            op, length, cid, _, t_ns = unpack(records, at)
+            end = at + 9 + length
+            if op != OP_MESSAGE or length < MESSAGE_HEADER or end > size:
+                return None
+            if count:
+                seen.append((cid, t_ns))
+            if wants(cid):
+                payload = records[at + PAYLOAD_AT : end].tobytes()
+                raw = _new(Raw, (connections[cid], payload))
+                timed.append(_new(Timed, (t_ns, (file_no, pos, at), raw)))
+            at = end
+        for cid, t_ns in seen:
+            self._count(cid, t_ns)
+        return timed
 
     def _chunk_records(
         self, records: memoryview, pos: int, count: bool
@@ -371,7 +655,7 @@ class McapFile:
                     if count:
                         self._count(cid, t_ns)
                     if self._wants(cid):
-                        raw = Raw(self.connections[cid], record.rest())
+                        raw = Raw(self.connections[cid], record.rest().tobytes())
                         timed.append(Timed(t_ns, (self.file_no, pos, inner), raw))
                 elif op in (OP_SCHEMA, OP_CHANNEL):
                     self._parse_records(bytes(record.rest()), op)

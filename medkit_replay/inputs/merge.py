@@ -6,6 +6,7 @@ Pure: no I/O, no clock; items are plain tuples whose payload is never compared.
 from __future__ import annotations
 
 import heapq
+from collections import deque
 from itertools import count
 from typing import TYPE_CHECKING, Generic, NamedTuple, TypeVar
 
@@ -59,27 +60,148 @@ def reorder(
     Yields:
         The items, sorted by ``(t_ns, position)``.
     """
+    # Items that arrive in order wait in a FIFO run (the common case, cheap); the first one
+    # out of order moves everything into a heap until the heap has drained again.
+    run: deque[Timed[T]] = deque()
     heap: list[tuple[int, Position, int, Timed[T]]] = []
     tiebreak = count()
     last: tuple[int, Position] | None = None
     for entry in stream:
-        if isinstance(entry, Bound):
+        if type(entry) is Bound or isinstance(entry, Bound):
             # Strict: an item at exactly the bound may still be preceded by one at a lower position.
-            while heap and heap[0][0] < entry.t_ns:
-                t_ns, position, _, timed = heapq.heappop(heap)
-                last = (t_ns, position)
-                yield timed
+            bound = entry.t_ns
+            if heap:
+                while heap and heap[0][0] < bound:
+                    t_ns, position, _, timed = heapq.heappop(heap)
+                    last = (t_ns, position)
+                    yield timed
+            elif run and run[0].t_ns < bound:
+                while run and run[0].t_ns < bound:
+                    timed = run.popleft()
+                    yield timed
+                last = (timed.t_ns, timed.position)
             continue
-        if last is not None and (entry.t_ns, entry.position) < last:
+        t_ns, position = entry.t_ns, entry.position
+        if last is not None and (t_ns < last[0] or (t_ns == last[0] and position < last[1])):
             on_late(entry)
             continue
-        heapq.heappush(heap, (entry.t_ns, entry.position, next(tiebreak), entry))
+        if not heap and (
+            not run
+            or t_ns > run[-1].t_ns
+            or (t_ns == run[-1].t_ns and position >= run[-1].position)
+        ):
+            run.append(entry)
+            if len(run) > max_held:
+                timed = run.popleft()
+                last = (timed.t_ns, timed.position)
+                yield timed
+            continue
+        for held in run:
+            heapq.heappush(heap, (held.t_ns, held.position, next(tiebreak), held))
+        run.clear()
+        heapq.heappush(heap, (t_ns, position, next(tiebreak), entry))
         if len(heap) > max_held:
             t_ns, position, _, timed = heapq.heappop(heap)
             last = (t_ns, position)
             yield timed
+    yield from run
     while heap:
         yield heapq.heappop(heap)[3]
+
+
+def reorder_batches(
+    stream: Iterable[Bound | Timed[T] | list[Timed[T]]],
+    on_late: Callable[[Timed[T]], None],
+    max_held: int,
+) -> Iterator[list[Timed[T]]]:
+    """:func:`reorder` for readers that hand over whole sorted batches: the same items, in lists.
+
+    A list in the stream is a batch of items already sorted by ``(t_ns, position)`` (a chunk's
+    messages) with no bound among them. Flattened, the output equals ``reorder`` of the
+    flattened stream; a batch that continues the items held moves through in one piece.
+    """
+    run: deque[Timed[T]] = deque()
+    heap: list[tuple[int, Position, int, Timed[T]]] = []
+    tiebreak = count()
+    last: tuple[int, Position] | None = None
+
+    def one(entry: Timed[T]) -> list[Timed[T]]:
+        """An item on its own, as reorder takes it; returns what leaves because of it."""
+        nonlocal last
+        t_ns, position = entry.t_ns, entry.position
+        if last is not None and (t_ns < last[0] or (t_ns == last[0] and position < last[1])):
+            on_late(entry)
+            return []
+        if not heap and (
+            not run
+            or t_ns > run[-1].t_ns
+            or (t_ns == run[-1].t_ns and position >= run[-1].position)
+        ):
+            run.append(entry)
+            if len(run) > max_held:
+                timed = run.popleft()
+                last = (timed.t_ns, timed.position)
+                return [timed]
+            return []
+        for held in run:
+            heapq.heappush(heap, (held.t_ns, held.position, next(tiebreak), held))
+        run.clear()
+        heapq.heappush(heap, (t_ns, position, next(tiebreak), entry))
+        if len(heap) > max_held:
+            t_ns, position, _, timed = heapq.heappop(heap)
+            last = (t_ns, position)
+            return [timed]
+        return []
+
+    for entry in stream:
+        if type(entry) is list:
+            if not entry:
+                continue
+            first = entry[0]
+            key = (first.t_ns, first.position)
+            if (
+                not heap
+                and (last is None or key >= last)
+                and (not run or key >= (run[-1].t_ns, run[-1].position))
+            ):
+                run.extend(entry)  # in order and none late: it joins the run whole
+                if len(run) > max_held:
+                    out = [run.popleft() for _ in range(len(run) - max_held)]
+                    last = (out[-1].t_ns, out[-1].position)
+                    yield out
+                continue
+            out = []
+            for item in entry:
+                out += one(item)
+            if out:
+                yield out
+        elif type(entry) is Bound or isinstance(entry, Bound):
+            bound = entry.t_ns
+            if heap:
+                out = []
+                while heap and heap[0][0] < bound:
+                    out.append(heapq.heappop(heap)[3])
+                if out:
+                    last = (out[-1].t_ns, out[-1].position)
+                    yield out
+            elif run and run[0].t_ns < bound:
+                if run[-1].t_ns < bound:
+                    out = list(run)
+                    run.clear()
+                else:
+                    out = []
+                    while run[0].t_ns < bound:
+                        out.append(run.popleft())
+                last = (out[-1].t_ns, out[-1].position)
+                yield out
+        else:
+            out = one(entry)  # type: ignore[arg-type]  # a Timed
+            if out:
+                yield out
+    if run:
+        yield list(run)
+    if heap:
+        yield [heapq.heappop(heap)[3] for _ in range(len(heap))]
 
 
 def merge(streams: Sequence[Iterable[Timed[T]]]) -> Iterator[Merged[T]]:

@@ -16,7 +16,7 @@ from medkit_replay.inputs.selection import Selection
 from medkit_replay.inputs.source import InputContext
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Iterator
+    from collections.abc import Callable, Iterable, Iterator
     from types import TracebackType
     from typing import Self
 
@@ -59,7 +59,31 @@ class Recording:
         if self._used:
             raise RuntimeError("Recording.messages() can be read only once")
         self._used = True
+        if len(self._inputs) == 1:
+            plain: Callable[[], Iterator[Message]] | None = getattr(
+                self._inputs[0], "plain_messages", None
+            )
+            if plain is not None:
+                return plain()
+            return (timed.item for timed in self._inputs[0].messages())
         return (merged.item for merged in merge([i.messages() for i in self._inputs]))
+
+    def message_tuples(self) -> Iterator[tuple[int, int, str, str, Role, object]]:
+        """:meth:`messages` as plain tuples laid out as Message: the replay's fast path.
+
+        Raises:
+            RuntimeError: the messages were already read.
+        """
+        if len(self._inputs) == 1:
+            tuples: Callable[[], Iterator[tuple[int, int, str, str, Role, object]]] | None = (
+                getattr(self._inputs[0], "message_tuples", None)
+            )
+            if tuples is not None:
+                if self._used:
+                    raise RuntimeError("Recording.messages() can be read only once")
+                self._used = True
+                return tuples()
+        return iter(self.messages())
 
     @property
     def span(self) -> tuple[int, int] | None:
@@ -112,6 +136,8 @@ def open_recording(
     diagnostics_topics: Iterable[str] = ("/diagnostics",),
     extra_topics: Iterable[str] = (),
     only_roles: Iterable[Role] | None = None,
+    light: bool = False,
+    reference: bool = False,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
@@ -121,6 +147,10 @@ def open_recording(
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).
         only_roles: read only topics of these roles (None: every role).
+        light: decode the topics the bridges read (every role but ``extra``) into light
+            records (same field names and values as rosbags' classes, plain slotted
+            objects), rosbags deciding every payload the light decoder does not take.
+        reference: the reference route: MCAP chunks always read whole, never by index.
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -154,7 +184,7 @@ def open_recording(
                     f"unsupported input (expected a rosbag2 directory or a {kinds} file)",
                     path=str(path),
                 )
-            context = InputContext(index, selection, sink)
+            context = InputContext(index, selection, sink, light=light, reference=reference)
             try:
                 inputs.append(opener(path, context))
             except OSError as exc:

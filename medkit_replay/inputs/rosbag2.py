@@ -17,7 +17,7 @@ import yaml
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.db3 import Db3File
 from medkit_replay.inputs.mcap import McapFile
-from medkit_replay.inputs.merge import Timed, reorder
+from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
 from medkit_replay.inputs.typestore import DecodeError, Decoder, DefinitionError, make_decoder
@@ -31,7 +31,7 @@ else:  # the zstd binding rosbags itself depends on
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
-    from medkit_replay.inputs.merge import Bound, Position
+    from medkit_replay.inputs.merge import Bound
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import InputContext
     from medkit_replay.inputs.storage import Connection, Raw, StorageFile
@@ -41,6 +41,8 @@ STORAGE_FILES: dict[str, Callable[[Path, int, Callable[[str], None]], StorageFil
     ".db3": Db3File,
 }
 """Storage file readers by suffix (after a ``.zstd`` file-compression suffix is removed)."""
+
+_FAST_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"  # a CDR payload starts with 00 0x instead, so this cannot clash
 MAX_HELD = 100_000
@@ -68,7 +70,11 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
     if not path.is_file():
         return None
     try:
-        document = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        try:  # libyaml's parser when present: the same documents, several times faster
+            document = yaml.load(text, Loader=_FAST_LOADER)  # a safe loader
+        except yaml.YAMLError:
+            document = yaml.safe_load(text)  # says what is wrong as the pure parser does
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
         warn(f"{path}: cannot be read ({_one_line(exc)})")
         return None
@@ -161,6 +167,8 @@ class Rosbag2Input:
         self._temp: TemporaryDirectory[str] | None = None
         self._files: list[StorageFile] = []
         self._readers: dict[tuple[int, int], tuple[Role, Decoder]] = {}
+        self._by_connection: dict[int, tuple[Role, Decoder]] = {}
+        self._connections: list[Connection] = []
         self._failures: dict[str, tuple[int, int, str]] = {}
         self._late: tuple[int, int] = (0, 0)  # how many, first time
         self._used = False
@@ -201,7 +209,10 @@ class Rosbag2Input:
         opener = STORAGE_FILES.get(PurePath(name).suffix)
         if opener is None:
             opener = McapFile if self._meta.storage == "mcap" else Db3File
-        return opener(path, file_no, self.ctx.warn)
+        opened = opener(path, file_no, self.ctx.warn)
+        if isinstance(opened, McapFile):
+            opened.indexed = not self.ctx.reference
+        return opened
 
     def _decompress(self, path: Path) -> Path:
         """Stream a file-compressed storage file into a temporary directory (kept until close).
@@ -245,7 +256,10 @@ class Rosbag2Input:
                 return False
             try:
                 decoder, problem = make_decoder(
-                    msgtype, connection.definition, lambda note: self._warn(f"{topic}: {note}")
+                    msgtype,
+                    connection.definition,
+                    lambda note: self._warn(f"{topic}: {note}"),
+                    light=self.ctx.light and role != "extra",
                 )
             except DefinitionError as exc:
                 self._warn(f"topic {topic} cannot be decoded: {exc}; not read")
@@ -253,11 +267,14 @@ class Rosbag2Input:
             if problem:
                 self._warn(f"{topic}: recorded definition unusable ({problem}); using the bundled")
             self._readers[(file_no, connection.id)] = (role, decoder)
+            # The storage file hands this very object back with each of its messages.
+            self._by_connection[id(connection)] = (role, decoder)
+            self._connections.append(connection)  # keeps every id above unique
             return True
 
         return accept
 
-    def _raw(self) -> Iterator[Bound | Timed[Raw]]:
+    def _raw(self) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         for file_no, file in enumerate(self._files):
             try:
                 yield from file.read(self._accepts(file_no), self._caps[file_no])
@@ -266,14 +283,51 @@ class Rosbag2Input:
 
     def messages(self) -> Iterator[Timed[Message]]:
         """Yield the selected, decoded messages once, sorted by (log time, position)."""
+        return self._stream(timed=True)  # type: ignore[return-value]  # Timed items
+
+    def plain_messages(self) -> Iterator[Message]:
+        """:meth:`messages` without their positions (a recording of one input needs none)."""
+        return self._stream(timed=False)  # type: ignore[return-value]  # Message items
+
+    def message_tuples(self) -> Iterator[tuple[int, int, str, str, Role, object]]:
+        """:meth:`plain_messages` as plain tuples laid out as Message (cheaper to build)."""
+        return self._stream(timed=False, plain=True)  # type: ignore[return-value]  # tuples
+
+    def _stream(
+        self, *, timed: bool, plain: bool = False
+    ) -> Iterator[Timed[Message] | Message | tuple[int, int, str, str, Role, object]]:
         if self._used:
             raise RuntimeError(f"{self.path}: messages() can be read only once")
         self._used = True
+        readers, input_index, every_zstd = (
+            self._by_connection,
+            self.ctx.input_index,
+            self._message_zstd,
+        )
         try:
-            for t_ns, position, raw in reorder(self._raw(), self._on_late, MAX_HELD):
-                message = self._decode(t_ns, position, raw)
-                if message is not None:
-                    yield Timed(t_ns, position, message)
+            for batch in reorder_batches(self._raw(), self._on_late, MAX_HELD):
+                for t_ns, position, raw in batch:
+                    connection = raw.connection
+                    role, decoder = readers[id(connection)]
+                    data = raw.data
+                    try:
+                        if every_zstd or data[:4] == ZSTD_MAGIC:
+                            data = _unzstd(data)
+                        msg = decoder.light_decode(data)
+                        if msg is None:
+                            msg = decoder.decode(data)
+                    except (DecodeError, ValueError, zstd.ZstdError) as exc:
+                        self._failed(connection.topic, t_ns, exc)
+                        continue
+                    topic, msgtype = connection.topic, connection.msgtype
+                    if plain:
+                        yield (t_ns, input_index, topic, msgtype, role, msg)
+                    elif timed:
+                        yield Timed(
+                            t_ns, position, Message(t_ns, input_index, topic, msgtype, role, msg)
+                        )
+                    else:
+                        yield Message(t_ns, input_index, topic, msgtype, role, msg)
         finally:
             self._report_losses()
 
@@ -281,19 +335,9 @@ class Rosbag2Input:
         count, first = self._late
         self._late = (count + 1, first if count else item.t_ns)
 
-    def _decode(self, t_ns: int, position: Position, raw: Raw) -> Message | None:
-        role, decoder = self._readers[(position[0], raw.connection.id)]
-        topic = raw.connection.topic
-        try:
-            data = raw.data
-            if self._message_zstd or bytes(data[:4]) == ZSTD_MAGIC:
-                data = _unzstd(data)
-            msg = decoder.decode(data)
-        except (DecodeError, ValueError, zstd.ZstdError) as exc:
-            count, first, reason = self._failures.get(topic, (0, t_ns, _one_line(exc)))
-            self._failures[topic] = (count + 1, first, reason)
-            return None
-        return Message(t_ns, self.ctx.input_index, topic, raw.connection.msgtype, role, msg)
+    def _failed(self, topic: str, t_ns: int, exc: Exception) -> None:
+        count, first, reason = self._failures.get(topic, (0, t_ns, _one_line(exc)))
+        self._failures[topic] = (count + 1, first, reason)
 
     def _report_losses(self) -> None:
         for topic, (count, first, reason) in sorted(self._failures.items()):

@@ -37,11 +37,19 @@ class Message(NamedTuple):
 
 
 class InputContext(NamedTuple):
-    """What an input needs from the recording that opens it."""
+    """What an input needs from the recording that opens it.
+
+    Attributes:
+        light: decode the topics the bridges read with light decoders (plain records with
+            the same fields) instead of rosbags' classes.
+        reference: read every MCAP chunk whole (the reference route, never by index).
+    """
 
     input_index: int
     selection: Selection
     warn: Callable[[str], None]
+    light: bool = False
+    reference: bool = False
 
 
 class Input(Protocol):

@@ -59,8 +59,11 @@ class StorageFile(Protocol):
 
     def read(
         self, wants: Callable[[Connection], bool], cap_ns: int | None
-    ) -> Iterator[Bound | Timed[Raw]]:
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         """Yield bounds and the messages of the connections ``wants`` accepts, in file order.
+
+        A list is a batch of messages sorted by ``(t_ns, position)`` with no bound among them
+        (see :func:`medkit_replay.inputs.merge.reorder_batches`).
 
         Args:
             wants: called once per connection, before any of its messages.

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 
+from medkit_replay.inputs.cdr import light_decoder
 from medkit_replay.inputs.selection import normalize_typename
 
 if TYPE_CHECKING:
@@ -194,14 +195,40 @@ def base_typestore() -> Typestore:
 
 
 class Decoder:
-    """Decodes one type's CDR payloads, trying the recording's definition, then the bundled one."""
+    """Decodes one type's CDR payloads, trying the recording's definition, then the bundled one.
+
+    With ``light``, a payload is first given to the light decoder generated from the definition
+    tried first (:mod:`medkit_replay.inputs.cdr`); whatever it does not take goes to rosbags.
+    """
 
     def __init__(
-        self, msgtype: str, candidates: list[tuple[str, Typestore]], note: Callable[[str], None]
+        self,
+        msgtype: str,
+        candidates: list[tuple[str, Typestore]],
+        note: Callable[[str], None],
+        *,
+        light: bool = False,
     ) -> None:
         self.msgtype = msgtype
         self._candidates = candidates
         self._note = note
+        self._light = light
+        self._fast = light_decoder(msgtype, candidates[0][1]) if light else None
+
+    @property
+    def is_light(self) -> bool:
+        """Whether payloads are tried with a light decoder first."""
+        return self._fast is not None
+
+    def light_decode(self, raw: bytes | memoryview) -> object | None:
+        """The light decoder's message, or None when it has none (then :meth:`decode`)."""
+        fast = self._fast
+        if fast is None or type(raw) is not bytes:
+            return None
+        try:
+            return fast(raw)
+        except Exception:  # rosbags decides, and says why
+            return None
 
     def decode(self, raw: bytes | memoryview) -> object:
         """Deserialize one payload.
@@ -209,6 +236,12 @@ class Decoder:
         Raises:
             DecodeError: no candidate definition fits the payload.
         """
+        fast = self._fast
+        if fast is not None and type(raw) is bytes:
+            try:
+                return fast(raw)
+            except Exception:  # rosbags below decides, and says why
+                pass
         first_error: Exception | None = None
         for index, (label, store) in enumerate(self._candidates):
             try:
@@ -220,6 +253,8 @@ class Decoder:
                 # Keep using the definition that fits; say once that the first choice did not.
                 self._candidates.insert(0, self._candidates.pop(index))
                 self._note(f"{self._candidates[1][0]} does not fit the data; used the {label}")
+                if self._light:
+                    self._fast = light_decoder(self.msgtype, store)
             return message
         raise DecodeError(str(first_error))
 
@@ -243,7 +278,7 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
 
 
 def make_decoder(
-    msgtype: str, definition: Definition, note: Callable[[str], None]
+    msgtype: str, definition: Definition, note: Callable[[str], None], *, light: bool = False
 ) -> tuple[Decoder, str | None]:
     """A decoder for ``msgtype`` and, if the recorded definition is unusable, why.
 
@@ -251,6 +286,7 @@ def make_decoder(
         msgtype: the normalised type name.
         definition: what the recording stores for it (may be empty).
         note: told once if the recorded definition turns out not to fit the data.
+        light: try a light decoder first (plain records, not rosbags' classes).
 
     Raises:
         DefinitionError: neither the recording nor the bundled types define ``msgtype``.
@@ -268,4 +304,4 @@ def make_decoder(
     if not candidates:
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
-    return Decoder(msgtype, candidates, note), problem
+    return Decoder(msgtype, candidates, note, light=light), problem

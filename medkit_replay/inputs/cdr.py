@@ -1,0 +1,524 @@
+"""Light CDR decoders: straight-line Python generated from a recording's own message definition.
+
+A port of rosbags' deserializer generator (``rosbags.serde.cdr``, little-endian payloads) that
+inlines nested messages and the string checks and builds plain slotted records with the same
+field names, values and value types (numpy arrays for arrays of numbers, as rosbags). It follows
+rosbags' alignment bookkeeping line by line and rejects every payload rosbags rejects; a payload
+it rejects (big-endian, damaged...) is left to rosbags, so results never depend on which ran.
+Definitions it does not cover (wstring, float128, odd field names) get no light decoder.
+"""
+
+from __future__ import annotations
+
+import keyword
+import sys
+from dataclasses import make_dataclass
+from itertools import pairwise
+from struct import Struct
+from typing import TYPE_CHECKING, Any
+
+import numpy
+from rosbags.interfaces import Nodetype
+from rosbags.serde import primitives
+from rosbags.serde.utils import SIZEMAP, align, align_after
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from rosbags.interfaces.typing import FieldDesc
+    from rosbags.typesys.store import Typestore
+
+_PRIMITIVES = frozenset(
+    (
+        "bool",
+        "byte",
+        "char",
+        "int8",
+        "int16",
+        "int32",
+        "int64",
+        "uint8",
+        "uint16",
+        "uint32",
+        "uint64",
+        "float32",
+        "float64",
+    )
+)
+_NDTYPE = {"bool": "bool_", "char": "uint8"}
+
+
+class UnsupportedError(Exception):
+    """The definition uses something the generator does not cover; rosbags decodes it."""
+
+
+class RejectedError(Exception):
+    """A payload the light decoder does not take; rosbags decides what it is."""
+
+
+def _align(a: int, ind: str) -> list[str]:
+    """Align ``p`` (an offset in the whole payload) to ``a`` relative to the CDR body at 4."""
+    if a <= 1:
+        return []
+    if a == 2:
+        return [f"{ind}p = (p + 1) & -2"]
+    if a == 4:
+        return [f"{ind}p = (p + 3) & -4"]
+    return [f"{ind}p = ((p + {a - 5}) & -{a}) + 4"]
+
+
+class _Generator:
+    """Emits one decode function for one type and the light classes it builds."""
+
+    def __init__(self, store: Typestore) -> None:
+        self.store = store
+        self.lines: list[str] = []
+        self.names: dict[str, object] = {"numpy": numpy, "RejectedError": RejectedError}
+        self.classes: dict[str, type] = {}
+        self.counter = 0
+
+    def var(self, stem: str) -> str:
+        self.counter += 1
+        return f"{stem}{self.counter}"
+
+    def cls(self, typename: str) -> str:
+        """The name (in the generated namespace) of the light class of ``typename``."""
+        key = "C_" + typename.replace("/", "__")
+        if key in self.names:
+            return key
+        msgdef = self.store.get_msgdef(typename)
+        fields = [name for name, _ in msgdef.fields]
+        consts = self.store.fielddefs[typename][0]
+        for name in fields + [c[0] for c in consts]:
+            if not name.isidentifier() or keyword.iskeyword(name) or name.startswith("__"):
+                raise UnsupportedError(f"field name {name!r} of {typename}")
+        if len({*fields, *(c[0] for c in consts)}) != len(fields) + len(consts):
+            raise UnsupportedError(f"a constant of {typename} shadows a field")
+        made = make_dataclass(
+            typename.replace("/", "__"), [(name, object) for name in fields], slots=True
+        )
+        made.__module__ = __name__
+        made.__msgtype__ = typename  # type: ignore[attr-defined]
+        for name, _, value in consts:
+            setattr(made, name, value)
+        self.names[key] = made
+        self.classes[typename] = made
+        return key
+
+    def prim(self, typ: str) -> str:
+        if typ not in _PRIMITIVES:
+            raise UnsupportedError(f"type {typ}")
+        key = f"u_{typ}"
+        self.names[key] = getattr(primitives, f"unpack_{typ}_le")
+        return key
+
+    def dtype(self, typ: str) -> str:
+        if typ not in _PRIMITIVES:
+            raise UnsupportedError(f"type {typ}")
+        key = f"d_{typ}"
+        self.names[key] = getattr(numpy, _NDTYPE.get(typ, typ))
+        return key
+
+    def string(self, target: str, ind: str) -> list[str]:
+        """Decode one string into ``target``, checked as rosbags' ``check_string`` does."""
+        self.names["u_uint32"] = primitives.unpack_uint32_le
+        return [
+            f"{ind}ln = u_uint32(raw, p)[0]",
+            f"{ind}e = p + 4 + ln",
+            f"{ind}if ln < 1 or e > n or raw[e - 1]:",
+            f"{ind}    raise RejectedError",
+            f"{ind}{target} = raw[p + 4 : e - 1].decode()",
+            f"{ind}p = e",
+        ]
+
+    def message(self, typename: str, target: str, ind: str) -> None:
+        """Decode one ``typename`` into the variable ``target`` (rosbags' function, inlined)."""
+        msgdef = self.store.get_msgdef(typename)
+        cls = self.cls(typename)
+        out = self.lines
+        values: list[str] = []
+        aligned = 8
+        fields: list[Any] = [*msgdef.fields, None]  # rosbags' field descriptions
+        for fcurr, fnext in pairwise(fields):
+            assert fcurr is not None
+            desc: Any = fcurr[1]
+            value = self.var("v")
+            values.append(value)
+            kind = desc[0]
+            if kind == Nodetype.NAME:
+                self.message(desc[1], value, ind)
+                aligned = align_after(desc, self.store)
+            elif kind == Nodetype.BASE:
+                typ = desc[1][0]
+                if typ == "string":
+                    out.extend(self.string(value, ind))
+                    aligned = 1
+                else:
+                    out.append(f"{ind}{value} = {self.prim(typ)}(raw, p)[0]")
+                    out.append(f"{ind}p += {SIZEMAP[typ]}")
+                    aligned = SIZEMAP[typ]
+            elif kind == Nodetype.ARRAY:
+                aligned = self.array(desc, value, ind)
+            elif kind == Nodetype.SEQUENCE:
+                aligned = self.sequence(desc, value, ind, aligned)
+            else:
+                raise UnsupportedError(f"node type {kind}")
+            if fnext and aligned < (anext := align(fnext[1], self.store)):
+                out.extend(_align(anext, ind))
+                aligned = anext
+        out.append(f"{ind}{target} = {cls}({', '.join(values)})")
+
+    def array(self, desc: Any, value: str, ind: str) -> int:
+        subdesc, length = desc[1]
+        out = self.lines
+        if subdesc[0] == Nodetype.BASE:
+            typ = subdesc[1][0]
+            if typ == "string":
+                out.append(f"{ind}{value} = []")
+                for index in range(length):
+                    if index:
+                        out.extend(_align(4, ind))
+                    item = self.var("s")
+                    out.extend(self.string(item, ind))
+                    out.append(f"{ind}{value}.append({item})")
+                return 1
+            size = length * SIZEMAP[typ] if typ in SIZEMAP else 0
+            out.append(
+                f"{ind}{value} = numpy.frombuffer(raw, dtype={self.dtype(typ)}, count={length}, "
+                "offset=p)"
+            )
+            out.append(f"{ind}p += {size}")
+            return SIZEMAP[typ]
+        if subdesc[0] != Nodetype.NAME:
+            raise UnsupportedError(f"array of {subdesc}")
+        before, after = align(subdesc, self.store), align_after(subdesc, self.store)
+        out.append(f"{ind}{value} = []")
+        out.append(f"{ind}for _ in range({length}):")
+        inner = ind + "    "
+        if before > after:
+            out.extend(_align(before, inner))
+        item = self.var("m")
+        self.message(subdesc[1], item, inner)
+        out.append(f"{inner}{value}.append({item})")
+        return after
+
+    def sequence(self, desc: Any, value: str, ind: str, aligned: int) -> int:
+        subdesc = desc[1][0]
+        out = self.lines
+        self.names["u_uint32"] = primitives.unpack_uint32_le
+        self.names["MAXSEQ"] = self.store.max_sequence_length
+        size = self.var("n")
+        out.append(f"{ind}{size} = u_uint32(raw, p)[0]")
+        out.append(f"{ind}p += 4")
+        aligned = 4
+        if subdesc[0] == Nodetype.BASE:
+            typ = subdesc[1][0]
+            minimum = 5 if typ == "string" else SIZEMAP.get(typ, 1)
+        else:
+            minimum = 1
+        out.append(f"{ind}if p + {size} * {minimum} > n or {size} > MAXSEQ:")
+        out.append(f"{ind}    raise RejectedError")
+        if subdesc[0] == Nodetype.BASE:
+            typ = subdesc[1][0]
+            if typ == "string":
+                out.append(f"{ind}{value} = []")
+                out.append(f"{ind}for _ in range({size}):")
+                inner = ind + "    "
+                out.extend(_align(4, inner))
+                item = self.var("s")
+                out.extend(self.string(item, inner))
+                out.append(f"{inner}{value}.append({item})")
+                aligned = 1
+            else:
+                if typ not in _PRIMITIVES:
+                    raise UnsupportedError(f"type {typ}")
+                before = align(subdesc, self.store)
+                if aligned < before:
+                    out.append(f"{ind}if {size}:")
+                    out.extend(_align(before, ind + "    "))
+                out.append(
+                    f"{ind}{value} = numpy.frombuffer(raw, dtype={self.dtype(typ)}, "
+                    f"count={size}, offset=p)"
+                )
+                out.append(f"{ind}p += {size} * {SIZEMAP[typ]}")
+                aligned = before
+        elif subdesc[0] == Nodetype.NAME:
+            before = align(subdesc, self.store)
+            out.append(f"{ind}{value} = []")
+            out.append(f"{ind}for _ in range({size}):")
+            inner = ind + "    "
+            out.extend(_align(before, inner))
+            item = self.var("m")
+            self.message(subdesc[1], item, inner)
+            out.append(f"{inner}{value}.append({item})")
+            aligned = align_after(subdesc, self.store)
+        else:
+            raise UnsupportedError(f"sequence of {subdesc}")
+        return min(4, aligned)
+
+
+def generate(msgtype: str, store: Typestore) -> tuple[Callable[[bytes], object], str]:
+    """The light decoder of ``msgtype`` as ``store`` defines it, and its source (for tests).
+
+    Raises:
+        UnsupportedError: the definition uses something the generator does not cover.
+    """
+    gen = _Generator(store)
+    body: list[str] = []
+    gen.lines = body
+    try:
+        gen.message(msgtype, "result", "    ")
+    except (KeyError, TypeError, ValueError) as exc:  # a type rosbags cannot resolve either
+        raise UnsupportedError(str(exc)) from None
+    bound = ", ".join(f"{name}={name}" for name in sorted(gen.names))  # globals as fast locals
+    lines = [
+        f"def decode(raw, {bound}):",
+        "    if raw[0] or raw[1] != 1:",
+        "        raise RejectedError",
+        "    n = len(raw)",
+        "    p = 4",
+        *body,
+        "    if p + 3 < n:",
+        "        raise RejectedError",
+        "    return result",
+    ]
+    source = "\n".join(lines)
+    namespace = dict(gen.names)
+    exec(compile(source, f"<light decoder of {msgtype}>", "exec"), namespace)
+    decode: Callable[[bytes], object] = namespace["decode"]  # type: ignore[assignment]
+    return decode, source
+
+
+DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
+_U32 = primitives.unpack_uint32_le
+_BYTE = primitives.unpack_byte_le
+_TIME = Struct("<iI").unpack_from
+_MAX_HEADS = 4096
+
+
+def _layout(store: Typestore, typename: str) -> tuple[object, ...]:
+    """A type's fields with every referenced type expanded: what decoding depends on."""
+    return tuple(
+        (name, _layout(store, desc[1]) if desc[0] == Nodetype.NAME else _sublayout(store, desc))
+        for name, desc in store.get_msgdef(typename).fields
+    )
+
+
+def _sublayout(store: Typestore, desc: FieldDesc) -> object:
+    if desc[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        sub, bound = desc[1]
+        inner = _layout(store, sub[1]) if sub[0] == Nodetype.NAME else sub
+        return (desc[0], inner, bound)
+    return desc
+
+
+class DiagnosticArrayView:
+    """A light diagnostic_msgs/msg/DiagnosticArray decoded for the diagnostic bridge.
+
+    ``heads`` holds each status's (level, name, message, hardware_id), shared between arrays
+    whose statuses repeat those bytes. ``header`` and ``status`` (the full statuses, with
+    their key/value pairs, already checked) are built when first read.
+    """
+
+    __slots__ = ("_built", "_header", "_raw", "_types", "heads")
+    __msgtype__ = DIAGNOSTIC_ARRAY
+
+    def __init__(
+        self,
+        stamp_and_frame: tuple[int, int, str],
+        heads: list[tuple[int, str, str, str]],
+        raw: bytes,
+        types: tuple[type, type, type, type],
+    ) -> None:
+        self._header = stamp_and_frame
+        self.heads = heads
+        self._raw = raw
+        self._types = types  # Header, Time, DiagnosticStatus, KeyValue
+        self._built: list[object] | None = None
+
+    @property
+    def header(self) -> object:
+        """std_msgs/msg/Header, as the generic light decoder builds it."""
+        header_cls, time_cls, _, _ = self._types
+        sec, nanosec, frame_id = self._header
+        return header_cls(time_cls(sec, nanosec), frame_id)
+
+    @property
+    def status(self) -> list[object]:
+        """The statuses, as the generic light decoder builds them."""
+        if self._built is not None:
+            return self._built
+        _, _, status_cls, pair_cls = self._types
+        raw = self._raw
+        p = 12 + 4 + _U32(raw, 12)[0]  # after the frame id
+        p = ((p + 3) & -4) + 4  # after the status count
+        out: list[object] = []
+        for level, name, message, hardware_id in self.heads:
+            p = (p + 4) & -4
+            for _ in range(3):  # name, message, hardware_id: known already
+                p = ((p + 4 + _U32(raw, p)[0]) + 3) & -4
+            count = _U32(raw, p)[0]
+            p += 4
+            pairs = []
+            for _ in range(count):
+                key, p = _text(raw, (p + 3) & -4)
+                value, p = _text(raw, (p + 3) & -4)
+                pairs.append(pair_cls(key, value))
+            out.append(status_cls(level, name, message, hardware_id, pairs))
+        self._built = out
+        return out
+
+    def __eq__(self, other: object) -> bool:
+        if not hasattr(other, "header") or not hasattr(other, "status"):
+            return NotImplemented
+        return bool(self.header == other.header and self.status == other.status)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable, like rosbags' messages
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(header={self.header!r}, status={self.status!r})"
+
+
+def _text(raw: bytes, p: int) -> tuple[str, int]:
+    """One string already checked: its text and the position after it."""
+    end = p + 4 + _U32(raw, p)[0]
+    return raw[p + 4 : end - 1].decode(), end
+
+
+def _diagnostic_array(store: Typestore) -> Callable[[bytes], object]:
+    if sys.byteorder != "little":
+        raise UnsupportedError("the DiagnosticArray decoder reads words natively")
+    """The DiagnosticArray decoder of the standard layout, remembering repeated status heads.
+
+    Checks every payload exactly as rosbags would (lengths, terminators, UTF-8, trailing
+    bytes); a status's level, name, message and hardware_id are decoded once per distinct
+    run of bytes, its key/value pairs only checked (they are decoded when ``status`` is read).
+    """
+    gen = _Generator(store)
+    types: tuple[type, type, type, type] = tuple(  # type: ignore[assignment]
+        gen.names[gen.cls(name)]
+        for name in (
+            "std_msgs/msg/Header",
+            "builtin_interfaces/msg/Time",
+            "diagnostic_msgs/msg/DiagnosticStatus",
+            "diagnostic_msgs/msg/KeyValue",
+        )
+    )
+    max_seq = store.max_sequence_length
+    heads_seen: dict[bytes, tuple[int, str, str, str]] = {}
+
+    def checked(raw: bytes, p: int, n: int) -> tuple[str, int]:
+        length = _U32(raw, p)[0]
+        end = p + 4 + length
+        if length < 1 or end > n or raw[end - 1]:
+            raise RejectedError
+        return raw[p + 4 : end - 1].decode(), end
+
+    def decode(raw: bytes) -> DiagnosticArrayView:  # straight for speed
+        if raw[0] or raw[1] != 1:
+            raise RejectedError
+        n = len(raw)
+        # Every length field sits 4-aligned: read them as native words (checked little-endian).
+        u32 = memoryview(raw)[: n & -4].cast("I")
+        sec, nanosec = _TIME(raw, 4)
+        length = u32[3]
+        p = 16 + length
+        if not length or raw[p - 1]:
+            raise RejectedError
+        frame_id = raw[16 : p - 1].decode()
+        p = (p + 3) & -4
+        count = u32[p >> 2]
+        p += 4
+        if p + count > n or count > max_seq:
+            raise RejectedError
+        heads: list[tuple[int, str, str, str]] = []
+        for _ in range(count):
+            start = p
+            p = (p + 4) & -4  # the level byte, then the name's alignment
+            e1 = p + 4 + u32[p >> 2]
+            p = (e1 + 3) & -4
+            e2 = p + 4 + u32[p >> 2]
+            p = (e2 + 3) & -4
+            e3 = p + 4 + u32[p >> 2]
+            if e3 > n:
+                raise RejectedError
+            key = raw[start:e3]
+            head = heads_seen.get(key)
+            if head is None:
+                at = (start + 4) & -4
+                name, at = checked(raw, at, n)
+                message, at = checked(raw, (at + 3) & -4, n)
+                hardware_id, at = checked(raw, (at + 3) & -4, n)
+                head = (_BYTE(raw, start)[0], name, message, hardware_id)
+                if len(heads_seen) >= _MAX_HEADS:
+                    heads_seen.clear()
+                heads_seen[key] = head
+            heads.append(head)
+            p = (e3 + 3) & -4
+            pairs = u32[p >> 2]
+            p += 4
+            if p + pairs > n or pairs > max_seq:
+                raise RejectedError
+            first = p
+            for _ in range(pairs):
+                # A text past the end fails at raw[e - 1] (IndexError): rosbags then decides.
+                p = (p + 3) & -4
+                length = u32[p >> 2]
+                e = p + 4 + length
+                if not length or raw[e - 1]:
+                    raise RejectedError
+                p = (e + 3) & -4
+                length = u32[p >> 2]
+                p += 4 + length
+                if not length or raw[p - 1]:
+                    raise RejectedError
+            if pairs and not raw[first:p].isascii():
+                at = first
+                for _ in range(2 * pairs):  # not all ASCII: check each text decodes
+                    _, at = checked(raw, (at + 3) & -4, n)
+        if p + 3 < n:
+            raise RejectedError
+        return DiagnosticArrayView((sec, nanosec, frame_id), heads, raw, types)
+
+    return decode
+
+
+_SPECIAL: dict[str, Callable[[Typestore], Callable[[bytes], object]]] = {
+    DIAGNOSTIC_ARRAY: _diagnostic_array,
+}
+"""Hand-written decoders, used when a recording's definition has the standard layout."""
+
+
+def _standard(msgtype: str, store: Typestore) -> bool:
+    from medkit_replay.inputs.typestore import base_typestore  # noqa: PLC0415  # import cycle
+
+    try:
+        return _layout(store, msgtype) == _layout(base_typestore(), msgtype)
+    except (KeyError, TypeError, ValueError):
+        return False
+
+
+_CACHE: dict[tuple[str, int], tuple[Typestore, Callable[[bytes], object] | None]] = {}
+_CACHE_SIZE = 1024
+
+
+def light_decoder(msgtype: str, store: Typestore) -> Callable[[bytes], object] | None:
+    """The light decoder of ``msgtype`` in ``store`` (cached per store), or None if unsupported.
+
+    The decoder raises on any payload it does not take; the caller then asks rosbags.
+    """
+    key = (msgtype, id(store))
+    cached = _CACHE.get(key)
+    if cached is None:
+        try:
+            special = _SPECIAL.get(msgtype)
+            if special is not None and _standard(msgtype, store):
+                decode: Callable[[bytes], object] | None = special(store)
+            else:
+                decode = generate(msgtype, store)[0]
+        except UnsupportedError:
+            decode = None
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.clear()
+        cached = _CACHE[key] = (store, decode)  # holding the store keeps its id unique
+    return cached[1]

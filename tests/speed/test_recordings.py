@@ -1,0 +1,83 @@
+"""Every sample and fixture recording, read and replayed on the fast path and the reference path.
+
+Same JSON report byte for byte, same messages field by field, same raw payloads and warnings
+whether MCAP chunks are read through their message indexes or whole.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import pytest
+
+from medkit_replay.errors import InputError
+from medkit_replay.inputs import open_recording
+from medkit_replay.pipeline import REFERENCE_ENV, reference_by_default, replay
+from tests.speed.support import FIXTURES, RULES, SAMPLES, plain, report_both_ways
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+RECORDINGS = SAMPLES + FIXTURES
+IDS = [p.name for p in RECORDINGS]
+
+
+@pytest.fixture(scope="module")
+def log_bridge_on(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("configs") / "log_bridge.yaml"
+    path.write_text("medkit_replay:\n  ros__parameters:\n    enable_log_bridge: true\n")
+    return path
+
+
+@pytest.mark.parametrize("recording", RECORDINGS, ids=IDS)
+@pytest.mark.parametrize("configs", ["defaults", "log_bridge", "nav2_rules"])
+def test_the_report_is_byte_identical(recording: Path, configs: str, log_bridge_on: Path) -> None:
+    chosen = {
+        "defaults": [],
+        "log_bridge": [log_bridge_on],
+        "nav2_rules": [RULES / "fault_manager.yaml", RULES / "bridges.yaml"],
+    }[configs]
+    try:
+        reference, fast = report_both_ways([recording], chosen)
+    except InputError:
+        with pytest.raises(InputError):
+            replay([recording], chosen, reference=False)
+        return
+    assert fast == reference
+
+
+def test_several_inputs_merged_are_byte_identical(log_bridge_on: Path) -> None:
+    inputs = [SAMPLES[0], *(p for p in FIXTURES if p.name.startswith(("talker", "service")))]
+    reference, fast = report_both_ways(inputs, [log_bridge_on])
+    assert fast == reference
+
+
+def _messages(
+    recording: Path, *, light: bool, reference: bool
+) -> tuple[list[tuple[object, ...]], list[str]]:
+    with open_recording(
+        [recording], rosout=True, light=light, reference=reference, extra_topics=["/chatter"]
+    ) as opened:
+        messages: list[tuple[object, ...]] = [
+            (m.t_ns, m.input_index, m.topic, m.msgtype, m.role, plain(m.msg))
+            for m in opened.messages()
+        ]
+        return messages, list(opened.warnings)
+
+
+@pytest.mark.parametrize("recording", RECORDINGS, ids=IDS)
+def test_light_messages_equal_rosbags_messages(recording: Path) -> None:
+    try:
+        expected = _messages(recording, light=False, reference=True)
+    except InputError:
+        return
+    assert _messages(recording, light=True, reference=False) == expected
+    assert _messages(recording, light=False, reference=False) == expected
+
+
+def test_the_environment_switch_selects_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv(REFERENCE_ENV, raising=False)
+    assert not reference_by_default()
+    for value, expected in (("1", True), ("true", True), ("0", False), ("", False), ("no", False)):
+        monkeypatch.setenv(REFERENCE_ENV, value)
+        assert reference_by_default() is expected
