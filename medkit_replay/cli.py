@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from medkit_replay.commands import config_option
 from medkit_replay.commands.check import check
 from medkit_replay.commands.diff import diff
 from medkit_replay.commands.fleet import fleet
@@ -35,13 +36,7 @@ def cli() -> None:
 
 @cli.command()
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option(
-    "--config",
-    "configs",
-    multiple=True,
-    type=click.Path(path_type=Path),
-    help="ROS 2 parameter file (repeatable; later files override earlier ones).",
-)
+@config_option()
 @click.option(
     "--json",
     "json_out",

@@ -17,6 +17,7 @@ from medkit_replay.checks.evaluate import CheckRun, check_run
 from medkit_replay.checks.github import step_summary, workflow_commands
 from medkit_replay.checks.junit import write_junit
 from medkit_replay.checks.terminal import print_conclusion, print_run
+from medkit_replay.commands import config_option
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.pipeline import replay
@@ -31,13 +32,7 @@ from medkit_replay.pipeline import replay
     type=click.Path(path_type=Path),
     help="Fault budget YAML (version 1; see docs/budgets.md).",
 )
-@click.option(
-    "--config",
-    "configs",
-    multiple=True,
-    type=click.Path(path_type=Path),
-    help="ROS 2 parameter file (repeatable; later files override earlier ones).",
-)
+@config_option()
 @click.option(
     "--merge",
     is_flag=True,

@@ -18,6 +18,7 @@ import click
 from rich.console import Console
 from rich.text import Text
 
+from medkit_replay.commands import config_option
 from medkit_replay.diffing import diff_renderable, diff_reports, tolerance_ns
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.json_report import to_report, write_json
@@ -113,13 +114,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
 @click.command()
 @click.argument("baseline", type=click.Path(path_type=Path))
 @click.argument("current", type=click.Path(path_type=Path))
-@click.option(
-    "--config",
-    "configs",
-    multiple=True,
-    type=click.Path(path_type=Path),
-    help="ROS 2 parameter file for a side that is replayed (repeatable).",
-)
+@config_option("ROS 2 parameter file for a side that is replayed (repeatable).")
 @click.option(
     "--time-tolerance",
     "time_tolerance",

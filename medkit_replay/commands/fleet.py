@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from medkit_replay.commands import config_option
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.fleet.discover import discover
 from medkit_replay.fleet.run import check_configs, dask_client_type, run_all, run_on_dask
@@ -22,12 +23,8 @@ DEFAULT_OUT = Path("fleet-report")
 
 @click.command()
 @click.argument("input_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option(
-    "--config",
-    "configs",
-    multiple=True,
-    type=click.Path(path_type=Path),
-    help="ROS 2 parameter file for every run (repeatable; later files override earlier ones).",
+@config_option(
+    "ROS 2 parameter file for every run (repeatable; later files override earlier ones)."
 )
 @click.option(
     "--budget",

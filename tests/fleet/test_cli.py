@@ -137,7 +137,8 @@ def test_summary_and_no_progress_off_a_terminal(
 
 def test_quiet_prints_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     write_script(tmp_path / "in" / "a.jsonl", [line for _, line in episode("A", 1.0, 4.0)])
-    status, out, err = run(["fleet", str(tmp_path / "in"), "--quiet", "--out", "o"], capsys)
+    out_dir = str(tmp_path / "o")
+    status, out, err = run(["fleet", str(tmp_path / "in"), "--quiet", "--out", out_dir], capsys)
     assert (status, out, err) == (0, "", "")
 
 
