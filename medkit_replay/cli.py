@@ -6,6 +6,7 @@ Thin: the only place errors become one line of text and an exit status.
 from __future__ import annotations
 
 import importlib
+import signal
 import sys
 from contextlib import nullcontext
 from pathlib import Path
@@ -17,7 +18,7 @@ from medkit_replay.commands import config_option
 from medkit_replay.commands.check import check
 from medkit_replay.commands.diff import diff
 from medkit_replay.commands.fleet import fleet
-from medkit_replay.errors import MedkitReplayError
+from medkit_replay.errors import MedkitReplayError, Terminated
 from medkit_replay.outputs.json_report import write_json
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.outputs.terminal import echo, print_summary
@@ -128,10 +129,26 @@ def _write_output(result: Result, target: Path, label: str, module: str, functio
         raise MedkitReplayError(f"cannot write {label}: {err.strerror}", path=str(target)) from None
 
 
+def _terminate(signum: int, _frame: object) -> None:
+    raise Terminated(signum)
+
+
+def _install_signal_handlers() -> None:
+    """SIGTERM and SIGHUP unwind like Ctrl-C, so every ``finally`` removes its temporary files."""
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is not None and signal.getsignal(signum) is signal.SIG_DFL:
+            signal.signal(signum, _terminate)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit status."""
+    _install_signal_handlers()
     try:
         status = cli.main(args=argv, prog_name="medkit-replay", standalone_mode=False)
+    except Terminated as err:
+        echo(f"medkit-replay: {err}; nothing partial was left behind\n", sys.stderr)
+        return 2
     except MedkitReplayError as err:
         echo(f"medkit-replay: error: {err.render()}\n", sys.stderr)
         return err.exit_code

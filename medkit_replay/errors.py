@@ -5,6 +5,7 @@ The library raises these; only the CLI prints them.
 
 from __future__ import annotations
 
+import signal
 from typing import ClassVar
 
 
@@ -54,3 +55,22 @@ class CheckFailed(MedkitReplayError):  # noqa: N818  # reads as a verdict, like 
     """A check (budget, diff) did not hold (exit 1)."""
 
     exit_code: ClassVar[int] = 1
+
+
+class Terminated(BaseException):  # like KeyboardInterrupt: not an Exception
+    """A termination signal (SIGTERM, SIGHUP) turned into an exception that unwinds the stack.
+
+    A BaseException, so that ``except Exception`` handlers never swallow it and every
+    ``finally`` on the way out runs (temporary files are removed there).
+    """
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        super().__init__(signum)
+
+    def __str__(self) -> str:
+        try:
+            name = signal.Signals(self.signum).name
+        except ValueError:
+            name = f"signal {self.signum}"
+        return f"terminated by {name}"

@@ -1,0 +1,96 @@
+"""Opening the files a user names: regular files only, and never more bytes than a bound.
+
+Configs, budgets, reports, metadata, scripts and recordings are opened here, so that a FIFO,
+a device or /dev/zero is refused at once instead of blocking or being read forever.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+from pathlib import Path
+from typing import IO
+
+# A parameter file, correlation file, budget or metadata.yaml is a few KB; a report of a
+# long mission a few hundred MB. Anything past these is not what the user meant to give.
+MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
+MAX_REPORT_FILE_BYTES = 2 * 1024 * 1024 * 1024
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+class FileRefusedError(OSError):
+    """A path that exists but is not a regular file, or holds more than the bound allows."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(errno.EINVAL, reason)
+
+    def __str__(self) -> str:
+        return str(self.strerror)
+
+
+def kind_of(mode: int) -> str:
+    """What a non-regular file is, in words."""
+    for test, name in _KINDS:
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def open_regular(path: Path | str) -> IO[bytes]:
+    """Open a regular file for reading, without blocking on a FIFO or following it forever.
+
+    Raises:
+        FileNotFoundError, PermissionError, OSError: as ``open`` would.
+        FileRefusedError: the path is a FIFO, device, socket or directory.
+    """
+    # O_NONBLOCK makes opening a FIFO return at once (it has no effect on regular files);
+    # the check then runs on the descriptor itself, so nothing can be swapped in between.
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            raise FileRefusedError(f"{kind_of(mode)}, not a regular file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def check_regular(path: Path | str) -> None:
+    """Refuse a path that is not a regular file (for readers that open by name, like sqlite).
+
+    Raises:
+        FileNotFoundError, OSError: the path cannot be looked up.
+        FileRefusedError: the path is a FIFO, device, socket or directory.
+    """
+    mode = Path(path).stat().st_mode
+    if not stat.S_ISREG(mode):
+        raise FileRefusedError(f"{kind_of(mode)}, not a regular file")
+
+
+def read_limited(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> bytes:
+    """The whole content of a regular file of at most ``limit`` bytes.
+
+    Raises:
+        FileNotFoundError, PermissionError, OSError: as ``open`` would.
+        FileRefusedError: not a regular file, or larger than ``limit``.
+    """
+    with open_regular(path) as stream:
+        data = stream.read(limit + 1)
+    if len(data) > limit:
+        raise FileRefusedError(f"larger than {limit:,} bytes, too large for this kind of file")
+    return data
+
+
+def read_limited_text(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> str:
+    """``read_limited`` decoded as UTF-8 (UnicodeDecodeError when it is not)."""
+    return read_limited(path, limit).decode("utf-8")

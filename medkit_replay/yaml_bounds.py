@@ -1,0 +1,102 @@
+"""Bounds on a composed YAML document: how many nodes it expands to and how deep it nests.
+
+PyYAML composes aliases as shared nodes, so a small file can stand for billions of nodes
+(or for a cycle) once walked; every YAML the tool reads is checked here before it is walked.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from yaml.nodes import MappingNode, Node, SequenceNode
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+# Real parameter files, correlation files, budgets and metadata hold hundreds of nodes.
+MAX_YAML_NODES = 1_000_000
+MAX_YAML_DEPTH = 64
+
+
+class YamlBoundsError(Exception):
+    """The document expands past the bounds, nests too deep or refers to itself."""
+
+    def __init__(self, message: str, line: int | None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.line = line
+
+
+def _children(node: Node) -> list[Node]:
+    if isinstance(node, MappingNode):
+        return [part for pair in node.value for part in pair]
+    if isinstance(node, SequenceNode):
+        return list(node.value)
+    return []
+
+
+def _line(node: Node) -> int | None:
+    return None if node.start_mark is None else node.start_mark.line + 1
+
+
+def check_graph(
+    root: Node | None, *, max_nodes: int = MAX_YAML_NODES, max_depth: int = MAX_YAML_DEPTH
+) -> None:
+    """Refuse a document that expands past ``max_nodes`` or ``max_depth``, or is cyclic.
+
+    Each distinct node is visited once (aliases are memoised), so a bomb costs its size in
+    the file, not its expansion.
+
+    Raises:
+        YamlBoundsError: with the line of the node where the bound was crossed.
+    """
+    if root is None:
+        return
+    size: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    on_path: set[int] = set()
+    stack: list[tuple[Node, bool]] = [(root, False)]
+    while stack:
+        node, done = stack.pop()
+        key = id(node)
+        if done:
+            kids = _children(node)
+            total = 1 + sum(size[id(kid)] for kid in kids)
+            deepest = 1 + max((depth[id(kid)] for kid in kids), default=0)
+            on_path.discard(key)
+            if total > max_nodes:
+                raise YamlBoundsError(
+                    f"the YAML expands to more than {max_nodes:,} nodes (an alias bomb?)",
+                    _line(node),
+                )
+            if deepest > max_depth:
+                raise YamlBoundsError(f"the YAML nests deeper than {max_depth} levels", _line(node))
+            size[key] = total
+            depth[key] = deepest
+            continue
+        if key in size:
+            continue
+        if key in on_path:
+            raise YamlBoundsError("the YAML refers to itself through an alias", _line(node))
+        on_path.add(key)
+        stack.append((node, True))
+        for kid in reversed(_children(node)):
+            kid_key = id(kid)
+            if kid_key in on_path:
+                raise YamlBoundsError("the YAML refers to itself through an alias", _line(kid))
+            if kid_key not in size:
+                stack.append((kid, False))
+
+
+def compose_bounded(compose: Callable[[], Node | None]) -> Node | None:
+    """Run a composer and check what it built; nesting too deep for the composer is refused too.
+
+    Raises:
+        YamlBoundsError: the document is past the bounds.
+    """
+    try:
+        root = compose()
+    except RecursionError:
+        raise YamlBoundsError(f"the YAML nests deeper than {MAX_YAML_DEPTH} levels", None) from None
+    check_graph(root)
+    return root
