@@ -19,6 +19,7 @@ INT64_MAX = (1 << 63) - 1
 INT32_MAX = (1 << 31) - 1
 
 _FILTER = "fault_reporter.local_filtering."
+_SHOWN = 80
 
 
 def _kind(value: object) -> str:
@@ -35,6 +36,14 @@ def _kind(value: object) -> str:
     if isinstance(value, list | tuple):
         return "array"
     return type(value).__name__
+
+
+def _shown(value: object) -> str:
+    """A value for a message: its repr, cut short when long (a 5,000-digit number, say)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
+        return f"of about {int(value.bit_length() * 0.30103) + 1:,} digits"
+    text = repr(value)
+    return text if len(text) <= _SHOWN else f"{text[: _SHOWN - 3]}..."
 
 
 def to_int32(value: int) -> int:
@@ -57,7 +66,8 @@ class ParameterReader:
 
     def _wrong(self, name: str, expected: str, value: object, hint: str = "") -> ConfigError:
         problem = (
-            f"{self.node} parameter '{name}' must be {expected}, got {_kind(value)} {value!r}{hint}"
+            f"{self.node} parameter '{name}' must be {expected}, "
+            f"got {_kind(value)} {_shown(value)}{hint}"
         )
         return ConfigError(problem, parameter=name)
 

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from yaml.error import MarkedYAMLError, YAMLError
 from yaml.nodes import MappingNode, Node, SequenceNode
+from yaml.reader import ReaderError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -100,3 +102,29 @@ def compose_bounded(compose: Callable[[], Node | None]) -> Node | None:
         raise YamlBoundsError(f"the YAML nests deeper than {MAX_YAML_DEPTH} levels", None) from None
     check_graph(root)
     return root
+
+
+def describe_yaml_error(
+    error: YAMLError, text: str | bytes | None = None
+) -> tuple[str, int | None]:
+    """A PyYAML error as one line of text and the 1-based line it points at (None if unknown).
+
+    PyYAML's own str() spans several lines (the problem, then where); a reader error knows only
+    a character position, turned into a line when the ``text`` it was read from is given.
+    """
+    line: int | None = None
+    if isinstance(error, MarkedYAMLError):
+        mark = error.problem_mark or error.context_mark
+        problem = error.problem or error.context or "invalid YAML"
+        line = None if mark is None else mark.line + 1
+    elif isinstance(error, ReaderError):
+        character = error.character
+        code = character if isinstance(character, int) else ord(str(character)[:1] or "\0")
+        problem = f"unacceptable character #x{code:04x}: {error.reason}"
+        if isinstance(text, str):
+            line = text.count("\n", 0, error.position) + 1
+        elif isinstance(text, bytes):
+            line = text.count(b"\n", 0, error.position) + 1
+    else:
+        problem = str(error)
+    return " ".join(part.strip() for part in str(problem).splitlines() if part.strip()), line

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import difflib
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
@@ -18,7 +17,10 @@ from typing import TYPE_CHECKING, TypeVar
 import yaml
 from yaml.constructor import ConstructorError, SafeConstructor
 
+from medkit_replay.engine.wildcards import Wildcard, compile_wildcard
 from medkit_replay.errors import ConfigError
+from medkit_replay.files import read_limited
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
@@ -45,6 +47,9 @@ KINDS = (
 )
 """Every rule kind, in the order docs/budgets.md describes them."""
 
+MAX_BUDGET_BYTES = 16 * 1024 * 1024
+"""A budget larger than this is refused unread (real ones are a few KB)."""
+
 _TOP_KEYS = ("version", "name", "rules")
 _INT = "tag:yaml.org,2002:int"
 _FLOAT = "tag:yaml.org,2002:float"
@@ -53,6 +58,7 @@ _BOOL = "tag:yaml.org,2002:bool"
 _NULL = "tag:yaml.org,2002:null"
 _T = TypeVar("_T")
 _MAX_SHOWN = 3
+_SHOWN = 40
 """Patterns named in a default rule name before "+N more"."""
 
 
@@ -67,17 +73,16 @@ class Pattern:
     """
 
     text: str
-    regex: re.Pattern[str] = field(compare=False, repr=False)
+    matcher: Wildcard = field(compare=False, repr=False)
 
     @classmethod
     def of(cls, text: str) -> Pattern:
         """Compile a glob."""
-        parts = (".*" if c == "*" else "." if c == "?" else re.escape(c) for c in text)
-        return cls(text, re.compile("".join(parts), re.DOTALL))
+        return cls(text, compile_wildcard(text, one="?"))
 
     def matches(self, code: str) -> bool:
         """Whether the whole ``code`` matches."""
-        return self.regex.fullmatch(code) is not None
+        return self.matcher.matches(code)
 
     def __str__(self) -> str:
         return self.text
@@ -282,6 +287,8 @@ class _Reader:
             return self._constructor.construct_object(node)
         except ConstructorError as err:
             raise self.fail(node, f"{where}: {err.problem}") from None
+        except ValueError:  # int() refuses thousands of digits
+            raise self.fail(node, f"{where}: {_text(node)} is too long a number") from None
 
     def string(self, node: yaml.Node, where: str) -> str:
         if not (isinstance(node, yaml.ScalarNode) and node.tag == _STR):
@@ -309,7 +316,7 @@ class _Reader:
         value = self.scalar(node, where)
         assert isinstance(value, int)
         if value < 0:
-            raise self.fail(node, f"{where}: must be 0 or more, found {value}")
+            raise self.fail(node, f"{where}: must be 0 or more, found {_text(node)}")
         return value
 
     def seconds(self, node: yaml.Node, where: str) -> float:
@@ -317,9 +324,16 @@ class _Reader:
             raise self.fail(node, f"{where}: expected a number of seconds, found {_kind(node)}")
         value = self.scalar(node, where)
         assert isinstance(value, int | float)
-        if not math.isfinite(value) or value < 0:
-            raise self.fail(node, f"{where}: must be a finite number, 0 or more, found {value}")
-        return float(value)
+        try:
+            seconds = float(value)
+        except OverflowError:
+            seconds = math.inf
+        # Times are compared in nanoseconds: past the double range there, no time is meant.
+        if not math.isfinite(seconds * 1e9) or seconds < 0:
+            raise self.fail(
+                node, f"{where}: must be a finite number, 0 or more, found {_text(node)}"
+            )
+        return seconds
 
     def mapping(
         self, node: yaml.Node, where: str, *, allowed: Sequence[str] | None = None
@@ -351,6 +365,12 @@ class _Reader:
                 node, f"{where}: the window ends ({end:g} s) before it starts ({start:g} s)"
             )
         return Window(start, end)
+
+
+def _text(node: yaml.Node) -> str:
+    """A scalar's text for a message, cut short when long."""
+    text = str(node.value)
+    return text if len(text) <= _SHOWN else f"{text[: _SHOWN - 3]}..."
 
 
 def _kind(node: yaml.Node) -> str:
@@ -491,12 +511,12 @@ def parse_budget(text: str, path: str) -> Budget:
     """
     reader = _Reader(path)
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as err:
-        line = err.problem_mark.line + 1 if err.problem_mark is not None else None
-        raise ConfigError(f"invalid YAML: {err.problem}", path=path, line=line) from None
+        root = compose_bounded(lambda: yaml.compose(text, Loader=yaml.SafeLoader))
+    except YamlBoundsError as err:
+        raise ConfigError(err.message, path=path, line=err.line) from None
     except yaml.YAMLError as err:
-        raise ConfigError(f"invalid YAML: {err}", path=path) from None
+        problem, line = describe_yaml_error(err, text)
+        raise ConfigError(f"invalid YAML: {problem}", path=path, line=line) from None
     if root is None:
         raise ConfigError("empty budget: expected 'version: 1' and a list of 'rules'", path=path)
     values = {k: (kn, v) for k, kn, v in reader.mapping(root, "budget", allowed=_TOP_KEYS)}
@@ -507,7 +527,7 @@ def parse_budget(text: str, path: str) -> Budget:
     if version != BUDGET_VERSION:
         raise reader.fail(
             version_node,
-            f"version: budget format {version} is not supported by this medkit-replay "
+            f"version: budget format {_text(version_node)} is not supported by this medkit-replay "
             f"(it reads version {BUDGET_VERSION})",
         )
     name: str | None = None
@@ -558,7 +578,7 @@ def load_budget(path: str | Path) -> Budget:
     """
     shown = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_limited(path, MAX_BUDGET_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise ConfigError("budget file not found", path=shown) from None
     except (OSError, UnicodeDecodeError) as err:

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from medkit_replay.config.yamlcpp import (
+    MAX_FILE_BYTES,
     YamlCppError,
     as_bool,
     as_string,
@@ -31,6 +32,7 @@ from medkit_replay.engine.correlation.rules import (
     string_to_representative,
     validate_config,
 )
+from medkit_replay.files import read_limited
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -203,11 +205,11 @@ def load_correlation(path: Path) -> CorrelationLoad:
 
     Every message is prefixed with the file path (and the line when one is known).
     """
-    if not path.exists():
-        return _no_engine(f"{path}", "Correlation config file not found")
     try:
-        data = path.read_bytes()
-    except OSError as exc:
+        data = read_limited(path, MAX_FILE_BYTES)
+    except FileNotFoundError:
+        return _no_engine(f"{path}", "Correlation config file not found")
+    except OSError as exc:  # a FIFO, device or directory too: refused, never read
         what = f"Cannot open correlation config file: {path} ({exc.strerror or exc})"
         return _no_engine(f"{path}", f"Failed to load correlation config: {what}")
     try:

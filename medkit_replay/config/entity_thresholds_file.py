@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from medkit_replay.config.yamlcpp import (
+    MAX_FILE_BYTES,
     YamlCppError,
     as_bool,
     as_int32,
@@ -20,6 +21,7 @@ from medkit_replay.config.yamlcpp import (
     subscript,
 )
 from medkit_replay.engine.thresholds import EntityOverride
+from medkit_replay.files import read_limited
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -79,11 +81,11 @@ def load_entity_thresholds(
     healing_threshold are negated; nothing is sanitised here.
     """
     where = f"{path}"
-    if not path.exists():
-        return (), (f"{where}: Entity thresholds config file not found; {_NONE}",)
     try:
-        root = compose(path.read_bytes())
-    except OSError as exc:
+        root = compose(read_limited(path, MAX_FILE_BYTES))
+    except FileNotFoundError:
+        return (), (f"{where}: Entity thresholds config file not found; {_NONE}",)
+    except OSError as exc:  # a FIFO, device or directory too: refused, never read
         return (), (f"{where}: Failed to read entity thresholds config: {exc.strerror}; {_NONE}",)
     except YamlCppError as exc:
         at = where if exc.line is None else f"{where}:{exc.line}"

@@ -14,8 +14,9 @@ from medkit_replay.config.nodes import located, values
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
+from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
-from medkit_replay.parameters import ParameterReader
+from medkit_replay.parameters import INT64_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams
@@ -47,8 +48,21 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
         reader.warn(f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)")
         heal = -heal
     auto_sec = reader.double("auto_confirm_after_sec", 0.0)
-    if auto_sec < 0 or math.isnan(auto_sec):
+    if auto_sec < 0:
         reader.warn(f"auto_confirm_after_sec {auto_sec} is negative; using 0.0")
+        auto_sec = 0.0
+    elif math.isnan(auto_sec):
+        # Upstream keeps NaN, and its timer starts only when the value is > 0: never.
+        reader.warn("auto_confirm_after_sec nan is not a number; using 0.0")
+        auto_sec = 0.0
+    elif auto_sec * NS_PER_SEC > INT64_MAX:
+        # Upstream turns the seconds into an int64-nanosecond duration: inf or a value past
+        # ~292 years is undefined there. Nothing that old exists in a recording (whose times
+        # are int64 nanoseconds), so the closest behaviour that is defined is: never fires.
+        reader.warn(
+            f"auto_confirm_after_sec {auto_sec} is beyond int64 nanoseconds (292 years): "
+            "time-based confirmation can never fire; using 0.0 (off)"
+        )
         auto_sec = 0.0
     near_miss = reader.integer("near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)
     if near_miss < 0:
@@ -90,6 +104,14 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
                     f"positive; using {DEFAULT_CLEANUP_INTERVAL_SEC}"
                 )
                 cleanup_sec = DEFAULT_CLEANUP_INTERVAL_SEC
+            elif cleanup_sec * 1000 * NS_PER_MS > INT64_MAX:
+                # rclcpp refuses a timer period past int64 nanoseconds (std::invalid_argument
+                # at start-up; inf first overflows the int64 milliseconds cast): the node stops.
+                raise ConfigError(
+                    f"fault_manager parameter 'correlation.cleanup_interval_sec' is {cleanup_sec}: "
+                    "a timer period must stay within int64 nanoseconds (292 years)",
+                    parameter="correlation.cleanup_interval_sec",
+                )
     # Upstream's wall timer period is int64(sec * 1000) milliseconds.
     cleanup_ms = max(int(cleanup_sec * 1000), 1)
     config = FaultManagerConfig(

@@ -5,6 +5,7 @@ Reads YAML only; knows nothing of what the parameters mean (see fault_manager.py
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -12,6 +13,8 @@ from typing import TYPE_CHECKING
 import yaml
 
 from medkit_replay.errors import ConfigError
+from medkit_replay.files import FileRefusedError, read_limited
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -33,6 +36,8 @@ _FLOAT = re.compile(
     r"[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN)"
 )
 _NULL = {"", "~", "null", "Null", "NULL"}
+_INT64_MAX = 2**63 - 1
+_INT64_DIGITS = len(str(_INT64_MAX))
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,13 +68,25 @@ def _scalar(node: yaml.ScalarNode) -> bool | int | float | str | None:
     if text in _BOOL_FALSE:
         return False
     if _INT.fullmatch(text):
-        return int(text)
+        digits = text.lstrip("+-").lstrip("0")
+        if len(digits) <= _INT64_DIGITS:
+            value = int(text)
+            if -_INT64_MAX - 1 <= value <= _INT64_MAX:
+                return value
+        # rcl's parser: strtoll overflows (ERANGE), so the text is tried as a double.
+        return _double(text)
     if _FLOAT.fullmatch(text):
         lowered = text.lower()
         if lowered.endswith((".inf", ".nan")):
             return float(lowered.replace(".", ""))
-        return float(text)
+        return _double(text)
     return text
+
+
+def _double(text: str) -> float | str:
+    """rcl's strtod step: a number past the double range (ERANGE) stays a string parameter."""
+    value = float(text)
+    return text if math.isinf(value) else value
 
 
 def _value(node: yaml.Node, path: Path, name: str) -> ParamValue:
@@ -100,11 +117,19 @@ def _flatten(node: yaml.Node, path: Path, prefix: str, out: NodeParams) -> None:
     """Nested maps and dotted names are the same parameter: ``a: {b: 1}`` ≡ ``a.b: 1``."""
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
-            key = str(key_node.value)
+            key = _key(key_node, path)
             name = f"{prefix}.{key}" if prefix else key
             _flatten(value_node, path, name, out)
         return
     out[prefix] = Param(_value(node, path, prefix), path, node.start_mark.line + 1)
+
+
+def _key(node: yaml.Node, path: Path) -> str:
+    """A map key's text; a list or map as a key names no parameter and no node."""
+    if not isinstance(node, yaml.ScalarNode):
+        msg = "a map key must be a name, not a list or map"
+        raise ConfigError(msg, path=str(path), line=node.start_mark.line + 1)
+    return str(node.value)
 
 
 def _node_matches(pattern: str, node_name: str) -> bool:
@@ -123,7 +148,7 @@ def _collect(
     node: yaml.MappingNode, path: Path, keys: list[str], found: list[tuple[str, yaml.Node]]
 ) -> None:
     for key_node, value_node in node.value:
-        key = str(key_node.value)
+        key = _key(key_node, path)
         if key == "ros__parameters":
             found.append(("/" + "/".join(k.strip("/") for k in keys), value_node))
         elif isinstance(value_node, yaml.MappingNode):
@@ -136,18 +161,20 @@ def _collect(
 def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     """Parse one ROS 2 parameter file into (node key, flat parameters) in file order."""
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_limited(path).decode("utf-8")
     except FileNotFoundError:
         raise ConfigError("config file not found", path=str(path)) from None
+    except FileRefusedError as err:
+        raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
     except (OSError, UnicodeDecodeError) as err:
         raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as err:
-        line = err.problem_mark.line + 1 if err.problem_mark is not None else None
-        raise ConfigError(f"invalid YAML: {err.problem}", path=str(path), line=line) from None
+        root = compose_bounded(lambda: yaml.compose(text, Loader=yaml.SafeLoader))
+    except YamlBoundsError as err:
+        raise ConfigError(err.message, path=str(path), line=err.line) from None
     except yaml.YAMLError as err:
-        raise ConfigError(f"invalid YAML: {err}", path=str(path)) from None
+        problem, line = describe_yaml_error(err, text)
+        raise ConfigError(f"invalid YAML: {problem}", path=str(path), line=line) from None
     if root is None:
         return []
     if not isinstance(root, yaml.MappingNode):

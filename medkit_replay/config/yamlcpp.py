@@ -15,11 +15,14 @@ from yaml.reader import Reader
 from yaml.resolver import BaseResolver
 from yaml.scanner import Scanner
 
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
+
 if TYPE_CHECKING:
     from yaml.error import Mark
     from yaml.events import ScalarEvent
 
 __all__ = [
+    "MAX_FILE_BYTES",
     "Node",
     "YamlCppError",
     "as_bool",
@@ -49,6 +52,9 @@ _BOOL_NAMES |= {"true": True, "false": False, "on": True, "off": False}
 _INT32_MIN = -(2**31)
 _INT32_MAX = 2**31 - 1
 _UINT32_MAX = 2**32 - 1
+# A correlation file with 10,000 rules is under 2 MB.
+MAX_FILE_BYTES = 16 * 1024 * 1024
+_MAX_INT32_DIGITS = 11  # 2**32 in octal; fewer in decimal and hex
 
 
 class YamlCppError(Exception):
@@ -97,13 +103,12 @@ def compose(text: str | bytes) -> Node | None:
     """
     loader = _Loader(text)
     try:
-        return loader.get_node() if loader.check_node() else None
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        problem = exc.problem or exc.context or "invalid YAML"
-        raise YamlCppError(problem, None if mark is None else mark.line + 1) from exc
+        return compose_bounded(lambda: loader.get_node() if loader.check_node() else None)
+    except YamlBoundsError as exc:
+        raise YamlCppError(exc.message, exc.line) from exc
     except yaml.YAMLError as exc:
-        raise YamlCppError(str(exc), None) from exc
+        problem, line = describe_yaml_error(exc, text)
+        raise YamlCppError(problem, line) from exc
     finally:
         loader.dispose()
 
@@ -235,6 +240,8 @@ def _stream_integer(text: str, *, signed: bool) -> int | None:
         return None
     if text[i:].strip(_STREAM_SPACE):
         return None
+    if len(text[start:i].lstrip("0")) > _MAX_INT32_DIGITS:
+        return None  # overflows any 32-bit type (and int() refuses thousands of digits)
     magnitude = int(text[start:i], base) if i > start else 0
     value = -magnitude if negative else magnitude
     if signed:

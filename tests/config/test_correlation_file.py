@@ -5,7 +5,8 @@ YAML texts go through parse_correlation_config and validate_config (correlation.
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -24,6 +25,9 @@ from medkit_replay.engine.correlation import (
     string_to_representative,
     validate_config,
 )
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 def parse(text: str) -> CorrelationConfig:
@@ -1018,18 +1022,19 @@ def test_load_opens_read_only_and_creates_nothing(
         path.read_bytes(),
         path.stat().st_mtime_ns,
     )
-    modes: list[str] = []
-    real_open = Path.open
+    flags: list[int] = []
+    real_open = os.open
 
-    def spy(self: Path, mode: str = "r", *args: object, **kwargs: object) -> object:
-        modes.append(mode)
-        return real_open(self, mode, *args, **kwargs)  # type: ignore[call-overload]
+    def spy(file: object, flag: int, *args: object, **kwargs: object) -> int:
+        flags.append(flag)
+        return real_open(file, flag, *args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(Path, "open", spy)
+    # The loader opens through medkit_replay.files (os.open, so that a FIFO cannot block it).
+    monkeypatch.setattr(os, "open", spy)
     assert load_correlation(path).config is not None
     assert load_correlation(tmp_path / "missing.yaml").config is None
     monkeypatch.undo()
-    assert modes
-    assert all(m in ("r", "rb") for m in modes)
+    assert flags
+    assert all(f & os.O_ACCMODE == os.O_RDONLY and not f & os.O_CREAT for f in flags)
     after = (sorted(p.name for p in tmp_path.iterdir()), path.read_bytes(), path.stat().st_mtime_ns)
     assert after == before

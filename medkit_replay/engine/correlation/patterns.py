@@ -5,26 +5,22 @@
 
 from __future__ import annotations
 
-import re
-from functools import lru_cache
 from typing import TYPE_CHECKING
+
+from medkit_replay.engine.wildcards import compile_wildcard
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
 
-
-@lru_cache(maxsize=4096)
-def _compile(pattern: str) -> re.Pattern[str]:
-    # `*` does not match CR/LF upstream (std::regex `.`); re's `.` without DOTALL agrees on \n
-    # only, so spell the class out.
-    return re.compile("[^\\n\\r]*".join(re.escape(piece) for piece in pattern.split("*")))
+# Upstream turns `*` into std::regex `.*`, and `.` there matches neither CR nor LF.
+_STAR_EXCLUDES = "\n\r"
 
 
 def matches_wildcard(code: str, pattern: str) -> bool:
     """True when ``code`` matches ``pattern`` (correlation.md §4)."""
     if "*" not in pattern:
         return code == pattern
-    return _compile(pattern).fullmatch(code) is not None
+    return compile_wildcard(pattern, star_excludes=_STAR_EXCLUDES).matches(code)
 
 
 def matches_any(code: str, patterns: Iterable[str]) -> bool:
