@@ -101,7 +101,11 @@ def compose(text: str | bytes) -> Node | None:
     None stands for yaml-cpp's default (Null) root: subscripting it finds nothing.
     Later documents are not read, as `YAML::Load` reads only the first one.
     """
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)  # reading starts here: bad bytes can fail already
+    except yaml.YAMLError as exc:
+        problem, line = describe_yaml_error(exc, text)
+        raise YamlCppError(problem, line) from exc
     try:
         return compose_bounded(lambda: loader.get_node() if loader.check_node() else None)
     except YamlBoundsError as exc:

@@ -124,6 +124,8 @@ class FaultManager:
         self.config = config
         self.output = output if output is not None else EngineOutput()
         self.storage = FaultStorage(config.near_miss_bound)
+        if config.auto_confirm_after_ns > 0:
+            self.storage.track_prefailed()
         self.resolver = EntityThresholdResolver(sanitize(config.debounce), config.entity_overrides)
         self.correlation = (
             CorrelationEngine(config.correlation)
@@ -282,6 +284,8 @@ class FaultManager:
                 after = compute_status(counter, before, config)
                 assert after is not None  # an existing fault always has a status to keep
                 fault.status = after
+                if after == "PREFAILED" and before != "PREFAILED":
+                    storage.watch(fault)
                 report_row(
                     (t_ns, origin, topic, fault_code, "PASSED", severity, description,
                      source_id, True, None, after, counter, conf, heal, None)
@@ -407,7 +411,7 @@ class FaultManager:
         """One tick of the 1 Hz time-based confirmation: silent PREFAILED → CONFIRMED (§1.7)."""
         if self.config.auto_confirm_after_ns <= 0:
             return []
-        due = self.storage.due_for_auto_confirm(now_ns, self.config.auto_confirm_after_ns)
+        due = self.storage.take_due_for_auto_confirm(now_ns, self.config.auto_confirm_after_ns)
         for code in due:
             self.confirm_by_timer(code, now_ns)
         return due

@@ -5,6 +5,7 @@ Pure state machine (fault-manager.md §1.4-§1.8, §1.13): no validation, events
 
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass, field
 
 from medkit_replay.engine.debounce import DebounceConfig, clamp, compute_status
@@ -62,6 +63,55 @@ class FaultStorage:
         self.faults: dict[str, FaultRecord] = {}
         self.near_misses: dict[str, list[NearMiss]] = {}
         self.near_miss_bound = near_miss_bound
+        # PREFAILED faults by last FAILED time, for time-based confirmation: a heap of
+        # (last_failed_ns, code) and each code's live entry. An entry may be stale (the fault
+        # left PREFAILED, or failed again later); it is checked when it comes out.
+        self.tracks_prefailed = False
+        self._prefailed: list[tuple[int, str]] = []
+        self._entry_ns: dict[str, int] = {}
+
+    def track_prefailed(self) -> None:
+        """Keep PREFAILED faults ordered by last FAILED time (for :meth:`take_prefailed`)."""
+        if not self.tracks_prefailed:
+            self.tracks_prefailed = True
+            for fault in self.faults.values():
+                self.watch(fault)
+
+    def watch(self, fault: FaultRecord) -> None:
+        """Note a fault that may be PREFAILED now, or may have failed again since last noted.
+
+        Invariant while tracking: every PREFAILED fault has a live entry no later than its
+        last FAILED time (a later entry is never needed: it is moved on when it comes out).
+        """
+        if not self.tracks_prefailed or fault.status != "PREFAILED":
+            return
+        code, key = fault.fault_code, fault.last_failed_ns
+        entry = self._entry_ns.get(code)
+        if entry is None or key < entry:
+            self._entry_ns[code] = key
+            heapq.heappush(self._prefailed, (key, code))
+
+    def take_prefailed(self, failed_by_ns: int) -> list[FaultRecord]:
+        """PREFAILED faults whose last FAILED is at or before ``failed_by_ns``, any order.
+
+        They leave the index: the caller confirms them. Costs their number (and that of the
+        stale entries passed), times log of the index size; never a scan of every fault.
+        """
+        heap, entries, faults = self._prefailed, self._entry_ns, self.faults
+        due: list[FaultRecord] = []
+        while heap and heap[0][0] <= failed_by_ns:
+            key, code = heapq.heappop(heap)
+            if entries.get(code) != key:
+                continue  # superseded by an earlier entry for the same code
+            del entries[code]
+            fault = faults[code]
+            if fault.status != "PREFAILED":
+                continue  # noted again by watch() if it ever becomes PREFAILED
+            if fault.last_failed_ns != key:
+                self.watch(fault)  # failed again since: its entry moves to the new time
+                continue
+            due.append(fault)
+        return due
 
     def report(
         self,
@@ -94,6 +144,7 @@ class FaultStorage:
             )
             self.faults[fault_code] = fault
             self._near_miss(fault, config, severity, source_id, t_ns)
+            self.watch(fault)
             return ReportOutcome(None, status, is_new=True)
 
         before = fault.status
@@ -111,6 +162,7 @@ class FaultStorage:
             assert status is not None
             fault.status = status
             self._near_miss(fault, config, severity, source_id, t_ns)
+            self.watch(fault)
             return ReportOutcome(before, status, is_new=True)
 
         fault.counter = clamp(fault.counter, config)
@@ -130,6 +182,7 @@ class FaultStorage:
         fault.status = new_status
         if failed:
             self._near_miss(fault, config, severity, source_id, t_ns)
+        self.watch(fault)
         return ReportOutcome(before, new_status, is_new=False)
 
     def clear(self, fault_code: str) -> bool:
@@ -140,13 +193,12 @@ class FaultStorage:
         fault.status = "CLEARED"
         return True
 
-    def due_for_auto_confirm(self, now_ns: int, after_ns: int) -> list[str]:
-        """Codes of PREFAILED faults whose last FAILED is at least ``after_ns`` old, byte order."""
-        due = [
-            code
-            for code, fault in self.faults.items()
-            if fault.status == "PREFAILED" and now_ns - fault.last_failed_ns >= after_ns
-        ]
+    def take_due_for_auto_confirm(self, now_ns: int, after_ns: int) -> list[str]:
+        """Codes of PREFAILED faults whose last FAILED is at least ``after_ns`` old, byte order.
+
+        Taken out of the PREFAILED index (:meth:`track_prefailed` must be on): confirm them.
+        """
+        due = [fault.fault_code for fault in self.take_prefailed(now_ns - after_ns)]
         due.sort(key=lambda c: c.encode("utf-8"))
         return due
 

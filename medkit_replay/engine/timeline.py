@@ -82,21 +82,22 @@ class Timeline:
         Between two messages only these ticks change state, and a tick only confirms
         PREFAILED faults, so each fault's confirming tick is the first one at or after
         ``last_failed + T``; transitions come out in tick order, then fault_code byte order.
+        Only the faults due by the last tick are looked at (the storage keeps PREFAILED
+        faults ordered by last FAILED time), not every fault.
         """
         assert self.t0_ns is not None
         last_tick = self._last_tick_at_or_before(t_ns, AUTO_CONFIRM_PERIOD_NS)
         after_ns = self.manager.config.auto_confirm_after_ns
         due: list[tuple[int, bytes, str]] = []
-        for code, fault in self.manager.storage.faults.items():
-            if fault.status != "PREFAILED":
-                continue
+        # max(last_failed + T, next) <= last_tick holds iff last_failed + T <= last_tick,
+        # since next <= last_tick here and last_tick lies on the tick grid.
+        for fault in self.manager.storage.take_prefailed(last_tick - after_ns):
             tick = _first_tick_at_or_after(
                 max(fault.last_failed_ns + after_ns, self._next_confirm_ns),
                 self.t0_ns,
                 AUTO_CONFIRM_PERIOD_NS,
             )
-            if tick <= last_tick:
-                due.append((tick, code.encode("utf-8"), code))
+            due.append((tick, fault.fault_code.encode("utf-8"), fault.fault_code))
         due.sort()
         for tick, _, code in due:
             self.manager.confirm_by_timer(code, tick)
