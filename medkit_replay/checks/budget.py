@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, TypeVar
 import yaml
 from yaml.constructor import ConstructorError, SafeConstructor
 
-from medkit_replay.engine.wildcards import Wildcard, compile_wildcard
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
+from medkit_replay.wildcards import Wildcard, compile_wildcard
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
 
 if TYPE_CHECKING:

@@ -13,7 +13,7 @@ from hypothesis import example, given, settings, strategies as st
 
 from medkit_replay.checks.budget import Pattern
 from medkit_replay.engine.correlation.patterns import matches_wildcard
-from medkit_replay.engine.wildcards import compile_wildcard
+from medkit_replay.wildcards import compile_wildcard
 from tests.redteam.support import run_limited
 
 if TYPE_CHECKING:

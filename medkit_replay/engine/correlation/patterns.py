@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.engine.wildcards import compile_wildcard
+from medkit_replay.wildcards import compile_wildcard
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence

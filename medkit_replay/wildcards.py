@@ -1,6 +1,7 @@
 """Whole-string wildcard matching in linear-ish time, for correlation patterns and budget globs.
 
-No backtracking regex: the pattern splits on ``*`` into segments placed leftmost, left to right.
+No backtracking regex: segments between stars are placed leftmost, left to right. Pure, and
+outside the engine package so that budget checks use it without loading the engine.
 """
 
 from __future__ import annotations
