@@ -16,7 +16,7 @@ from medkit_replay.engine.manager import FaultManagerConfig
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
-from medkit_replay.parameters import INT64_MAX, ParameterReader
+from medkit_replay.parameters import INT64_MAX, ParameterReader, to_int32
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams
@@ -34,6 +34,19 @@ def fault_manager_config(params: NodeParams) -> tuple[FaultManagerConfig, list[s
     return located(params, lambda: _build(params))
 
 
+def _int32(reader: ParameterReader, name: str, value: int, default: int) -> int:
+    """Upstream keeps both thresholds as ``static_cast<int32_t>`` of the negated int64.
+
+    Negating INT64_MIN wraps to itself there, so its low 32 bits (0) are kept, as here. A
+    value that wraps past the sanitiser's band is replaced by the sanitiser, said in a warning.
+    """
+    wrapped = to_int32(value)
+    if wrapped != value:
+        fixed = wrapped if (wrapped < 0 if default < 0 else wrapped >= 0) else default
+        reader.warn(f"{name} {value} is outside int32: upstream keeps {wrapped}; using {fixed}")
+    return wrapped
+
+
 def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     warnings = reader.warnings
@@ -43,10 +56,13 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
             f"confirmation_threshold {conf} is positive; using {-conf} (upstream negates it)"
         )
         conf = -conf
+    in_int32 = to_int32(conf) == conf
+    conf = _int32(reader, "confirmation_threshold", conf, -1)
     heal = reader.integer("healing_threshold", 3)
     if heal < 0:
         reader.warn(f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)")
         heal = -heal
+    heal = _int32(reader, "healing_threshold", heal, 3)
     auto_sec = reader.double("auto_confirm_after_sec", 0.0)
     if auto_sec < 0:
         reader.warn(f"auto_confirm_after_sec {auto_sec} is negative; using 0.0")
@@ -75,7 +91,7 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
         healing_enabled=reader.boolean("healing_enabled", False),
         healing_threshold=heal,
     )
-    if conf == 0:
+    if conf == 0 and in_int32:
         reader.warn("confirmation_threshold 0 is invalid; using -1")
 
     overrides: tuple[EntityOverride, ...] = ()

@@ -148,6 +148,29 @@ def test_integer_past_int64_reads_as_a_double(tmp_path: Path, script: Path) -> N
     )
 
 
+@pytest.mark.parametrize(
+    ("lines", "conf", "heal"),
+    [
+        (("confirmation_threshold: 9223372036854775807",), -1, 3),
+        (("healing_threshold: -9223372036854775808",), -1, 0),
+        (("confirmation_threshold: -9223372036854775808", "healing_threshold: 2147483648"), -1, 3),
+        (("confirmation_threshold: -4294967298",), -2, 3),
+    ],
+    ids=["conf-max", "heal-min", "both", "conf-wraps"],
+)
+def test_thresholds_past_int32_wrap_as_upstream_casts_them(
+    tmp_path: Path, script: Path, lines: tuple[str, ...], conf: int, heal: int
+) -> None:
+    # Upstream: static_cast<int32_t> of the (negated) int64, then the sanitiser.
+    config = tmp_path / "params.yaml"
+    config.write_text(params("healing_enabled: true", *lines))
+    warnings = analyze_warnings(tmp_path, script, config)
+    assert any("outside int32" in w for w in warnings), warnings
+    data = json.loads((tmp_path / "report.json").read_text())
+    first = data["reports"][0]
+    assert (first["confirmation_threshold"], first["healing_threshold"]) == (conf, heal)
+
+
 @pytest.mark.parametrize("value", [".inf", "1e308", "1.0e10"])
 def test_auto_confirm_beyond_int64_never_fires(tmp_path: Path, script: Path, value: str) -> None:
     config = tmp_path / "params.yaml"
