@@ -5,22 +5,28 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 from medkit_replay.wildcards import compile_wildcard
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping, Sequence
+    from collections.abc import Callable, Iterable, Mapping, Sequence
 
 # Upstream turns `*` into std::regex `.*`, and `.` there matches neither CR nor LF.
 _STAR_EXCLUDES = "\n\r"
+
+
+@lru_cache(maxsize=4096)
+def _matcher(pattern: str) -> Callable[[str], bool]:
+    return compile_wildcard(pattern, star_excludes=_STAR_EXCLUDES).matches
 
 
 def matches_wildcard(code: str, pattern: str) -> bool:
     """True when ``code`` matches ``pattern`` (correlation.md §4)."""
     if "*" not in pattern:
         return code == pattern
-    return compile_wildcard(pattern, star_excludes=_STAR_EXCLUDES).matches(code)
+    return _matcher(pattern)(code)
 
 
 def matches_any(code: str, patterns: Iterable[str]) -> bool:
