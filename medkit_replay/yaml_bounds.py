@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from yaml.error import MarkedYAMLError, YAMLError
 from yaml.nodes import MappingNode, Node, SequenceNode
-from yaml.reader import ReaderError
+from yaml.reader import Reader, ReaderError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -128,3 +128,19 @@ def describe_yaml_error(
     else:
         problem = str(error)
     return " ".join(part.strip() for part in str(problem).splitlines() if part.strip()), line
+
+
+def compose_bounded_at(reader: Reader, compose: Callable[[], Node | None]) -> Node | None:
+    """``compose_bounded``, and nesting too deep for the composer gets the line it reached.
+
+    ``reader`` is the loader ``compose`` runs on (every PyYAML loader is a Reader).
+
+    Raises:
+        YamlBoundsError: the document is past the bounds.
+    """
+    try:
+        return compose_bounded(compose)
+    except YamlBoundsError as err:
+        if err.line is not None:
+            raise
+        raise YamlBoundsError(err.message, reader.get_mark().line + 1) from None

@@ -20,7 +20,7 @@ from yaml.constructor import ConstructorError, SafeConstructor
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
 from medkit_replay.wildcards import Wildcard, compile_wildcard
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
@@ -511,7 +511,11 @@ def parse_budget(text: str, path: str) -> Budget:
     """
     reader = _Reader(path)
     try:
-        root = compose_bounded(lambda: yaml.compose(text, Loader=yaml.SafeLoader))
+        loader = yaml.SafeLoader(text)
+        try:
+            root = compose_bounded_at(loader, loader.get_single_node)
+        finally:
+            loader.dispose()
     except YamlBoundsError as err:
         raise ConfigError(err.message, path=path, line=err.line) from None
     except yaml.YAMLError as err:

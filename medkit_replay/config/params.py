@@ -14,7 +14,7 @@ import yaml
 
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import FileRefusedError, read_limited
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -169,7 +169,11 @@ def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     except (OSError, UnicodeDecodeError) as err:
         raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
     try:
-        root = compose_bounded(lambda: yaml.compose(text, Loader=yaml.SafeLoader))
+        loader = yaml.SafeLoader(text)
+        try:
+            root = compose_bounded_at(loader, loader.get_single_node)
+        finally:
+            loader.dispose()
     except YamlBoundsError as err:
         raise ConfigError(err.message, path=str(path), line=err.line) from None
     except yaml.YAMLError as err:

@@ -15,7 +15,7 @@ from yaml.reader import Reader
 from yaml.resolver import BaseResolver
 from yaml.scanner import Scanner
 
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded, describe_yaml_error
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
 
 if TYPE_CHECKING:
     from yaml.error import Mark
@@ -107,7 +107,9 @@ def compose(text: str | bytes) -> Node | None:
         problem, line = describe_yaml_error(exc, text)
         raise YamlCppError(problem, line) from exc
     try:
-        return compose_bounded(lambda: loader.get_node() if loader.check_node() else None)
+        return compose_bounded_at(
+            loader, lambda: loader.get_node() if loader.check_node() else None
+        )
     except YamlBoundsError as exc:
         raise YamlCppError(exc.message, exc.line) from exc
     except yaml.YAMLError as exc:

@@ -97,7 +97,7 @@ def test_self_referring_config(tmp_path: Path, script: Path, body: str) -> None:
 def test_deeply_nested_config(tmp_path: Path, script: Path, depth: int) -> None:
     config = tmp_path / "params.yaml"
     config.write_text(params("x: " + "[" * depth + "]" * depth))
-    assert_one_line_error(analyze(tmp_path, script, config), str(config), "nests deeper")
+    assert_one_line_error(analyze(tmp_path, script, config), f"{config}:3:", "nests deeper")
 
 
 def test_special_and_oversized_config(tmp_path: Path, script: Path) -> None:
@@ -226,7 +226,10 @@ CORRELATION_HEAD = "correlation:\n  enabled: true\n"
     [
         (CORRELATION_HEAD + laughs("  "), "alias bomb"),
         (CORRELATION_HEAD + "  rules: &r [*r]\n", "refers to itself"),
-        (CORRELATION_HEAD + "  rules: " + "[" * 5000 + "]" * 5000 + "\n", "nests deeper"),
+        (
+            CORRELATION_HEAD + "  rules: " + "[" * 5000 + "]" * 5000 + "\n",
+            ":3: Failed to load correlation config: the YAML nests deeper",
+        ),
         (CORRELATION_HEAD + "  default_window_ms: \x00\n", "unacceptable character"),
         (CORRELATION_HEAD + f"  default_window_ms: {HUGE}\n", "bad conversion"),
     ],
@@ -267,10 +270,13 @@ def test_special_referenced_files_are_refused_unread(tmp_path: Path, script: Pat
     fifo = tmp_path / "fifo.yaml"
     os.mkfifo(fifo)
     (tmp_path / "folder.yaml").mkdir()
+    with (tmp_path / "big.yaml").open("wb") as out:  # sparse, past the 16 MiB bound
+        out.truncate(17 * 1024 * 1024)
     for target, what in (
         ("/dev/zero", "character device"),
         ("fifo.yaml", "FIFO"),
         ("folder.yaml", "directory"),
+        ("big.yaml", "larger than"),
     ):
         for key in ("correlation", "entity_thresholds"):
             warnings = analyze_warnings(tmp_path, script, referenced(tmp_path, key, target))
@@ -287,7 +293,7 @@ BUDGET_HEAD = "version: 1\nrules:\n  - never_confirm: [ESTOP]\n"
     [
         (BUDGET_HEAD + "x:\n" + laughs("  "), "alias bomb"),
         ("version: 1\nrules: &r [*r]\n", "refers to itself"),
-        ("version: 1\nrules: " + "[" * 5000 + "]" * 5000 + "\n", "nests deeper"),
+        ("version: 1\nrules: " + "[" * 5000 + "]" * 5000 + "\n", ":2: the YAML nests deeper"),
         ("version: 1\nrules:\n  - max_occurrences: {'*': " + HUGE + "}\n", "too long"),
         (f"version: {HUGE}\nrules: []\n", "too long"),
         ("version: 1\nrules:\n  - max_confirmed_duration_sec: {'*': 1.0e+308}\n", "finite"),
