@@ -144,7 +144,8 @@ class FaultStorage:
             )
             self.faults[fault_code] = fault
             self._near_miss(fault, config, severity, source_id, t_ns)
-            self.watch(fault)
+            if self.tracks_prefailed:
+                self.watch(fault)
             return ReportOutcome(None, status, is_new=True)
 
         before = fault.status
@@ -162,7 +163,8 @@ class FaultStorage:
             assert status is not None
             fault.status = status
             self._near_miss(fault, config, severity, source_id, t_ns)
-            self.watch(fault)
+            if self.tracks_prefailed:
+                self.watch(fault)
             return ReportOutcome(before, status, is_new=True)
 
         fault.counter = clamp(fault.counter, config)
@@ -182,7 +184,8 @@ class FaultStorage:
         fault.status = new_status
         if failed:
             self._near_miss(fault, config, severity, source_id, t_ns)
-        self.watch(fault)
+        if self.tracks_prefailed:
+            self.watch(fault)
         return ReportOutcome(before, new_status, is_new=False)
 
     def clear(self, fault_code: str) -> bool:
