@@ -582,9 +582,14 @@ def load_budget(path: str | Path) -> Budget:
     """
     shown = str(path)
     try:
-        text = read_limited(path, MAX_BUDGET_BYTES).decode("utf-8")
+        data = read_limited(path, MAX_BUDGET_BYTES)
     except FileNotFoundError:
         raise ConfigError("budget file not found", path=shown) from None
-    except (OSError, UnicodeDecodeError) as err:
+    except OSError as err:  # a FIFO, device, directory or oversized file too
         raise ConfigError(f"cannot read budget file: {err}", path=shown) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = data.count(b"\n", 0, err.start) + 1
+        raise ConfigError(f"cannot read budget file: {err}", path=shown, line=line) from None
     return parse_budget(text, shown)

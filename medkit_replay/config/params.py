@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import yaml
 
 from medkit_replay.errors import ConfigError
-from medkit_replay.files import FileRefusedError, read_limited
+from medkit_replay.files import read_limited
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
 
 if TYPE_CHECKING:
@@ -161,13 +161,16 @@ def _collect(
 def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     """Parse one ROS 2 parameter file into (node key, flat parameters) in file order."""
     try:
-        text = read_limited(path).decode("utf-8")
+        data = read_limited(path)
     except FileNotFoundError:
         raise ConfigError("config file not found", path=str(path)) from None
-    except FileRefusedError as err:
+    except OSError as err:  # a FIFO, device, directory or oversized file too
         raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(f"cannot read config file: {err}", path=str(path)) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        at = data.count(b"\n", 0, err.start) + 1
+        raise ConfigError(f"cannot read config file: {err}", path=str(path), line=at) from None
     try:
         loader = yaml.SafeLoader(text)
         try:

@@ -126,7 +126,7 @@ def test_yaml_errors_are_one_line(tmp_path: Path, script: Path) -> None:
     line = assert_one_line_error(analyze(tmp_path, script, config), f"{config}:4:")
     assert "unacceptable character" in line
     config.write_bytes(params("a: 1").encode() + b"    b: \xff\n")
-    assert_one_line_error(analyze(tmp_path, script, config), f"{config}:")
+    assert_one_line_error(analyze(tmp_path, script, config), f"{config}:4:", "utf-8")
 
 
 def test_huge_integer_parameter_is_a_config_error(tmp_path: Path, script: Path) -> None:
