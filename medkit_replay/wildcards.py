@@ -1,7 +1,7 @@
 """Whole-string wildcard matching in linear-ish time, for correlation patterns and budget globs.
 
-No backtracking regex: segments between stars are placed leftmost, left to right. Pure, and
-outside the engine package so that budget checks use it without loading the engine.
+Two or more stars never reach a backtracking regex: the segments between them are placed
+leftmost, left to right. Pure, outside the engine so that budget checks need not load it.
 """
 
 from __future__ import annotations
