@@ -7,6 +7,7 @@ a Dask cluster (:mod:`medkit_replay.fleet.run`), writes the report and the summa
 
 from __future__ import annotations
 
+import math
 import sys
 from contextlib import nullcontext
 from pathlib import Path
@@ -17,8 +18,17 @@ from medkit_replay.commands import config_option
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.fleet.discover import discover
 from medkit_replay.fleet.run import check_configs, dask_client_type, run_all, run_on_dask
+from medkit_replay.outputs.atomic import refuse_overlap
 
 DEFAULT_OUT = Path("fleet-report")
+MAX_TIMEOUT = 10**9
+"""Seconds: a longer --timeout is refused (some 30 years)."""
+
+
+def _timeout(_ctx: click.Context, _param: click.Parameter, value: float | None) -> float | None:
+    if value is not None and not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT):
+        raise click.BadParameter(f"must be a number of seconds above 0, at most {MAX_TIMEOUT}")
+    return value
 
 
 @click.command()
@@ -46,6 +56,14 @@ DEFAULT_OUT = Path("fleet-report")
     help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
 )
 @click.option(
+    "--timeout",
+    type=float,
+    default=None,
+    callback=_timeout,
+    metavar="SECONDS",
+    help="Kill a run that takes longer and report it as failed (runs in worker processes).",
+)
+@click.option(
     "--out",
     "out_dir",
     type=click.Path(path_type=Path, file_okay=False),
@@ -60,18 +78,20 @@ def fleet(
     budget: Path | None,
     jobs: int | None,
     dask_address: str | None,
+    timeout: float | None,
     out_dir: Path,
     quiet: bool,
 ) -> None:
     """Replay every recording under INPUT_DIR... as its own run and compare the runs.
 
     Recordings: rosbag2 folders, bare .mcap and .db3 files, .jsonl scripts. A recording that
-    cannot be replayed is reported in its row; the others still run.
+    cannot be replayed, times out or whose worker dies is reported in its row; the others
+    still run. Exit status: 1 when --budget is given and a run failed it or failed at all.
 
     \b
     Examples:
       medkit-replay fleet missions/ --config robot_params.yaml --out fleet-report
-      medkit-replay fleet missions/ --jobs 8 --quiet
+      medkit-replay fleet missions/ --jobs 8 --timeout 600 --quiet
       medkit-replay fleet /shared/missions --dask tcp://scheduler:8786
     """
     if dask_address is not None and jobs is not None:
@@ -85,11 +105,15 @@ def fleet(
 
         parsed_budget = load_budget(budget)
     from medkit_replay.fleet.report import (  # noqa: PLC0415  # pandas: only when it runs
+        FILES,
         fleet_progress,
         print_summary,
-        write_report,
+        tabulated,
+        write_texts,
     )
 
+    protected = [*input_dirs, *configs, *([budget] if budget is not None else [])]
+    refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])
     recordings = discover(input_dirs)
     if not recordings:
         raise InputError(
@@ -105,16 +129,27 @@ def fleet(
     bar = fleet_progress(sys.stderr, len(recordings), quiet=quiet)
     with bar if bar is not None else nullcontext():
         if dask_address is not None:
-            runs = run_on_dask(dask_address, recordings, configs, budget=parsed_budget, on_done=bar)
+            runs = run_on_dask(
+                dask_address,
+                recordings,
+                configs,
+                budget=parsed_budget,
+                timeout=timeout,
+                on_done=bar,
+            )
         else:
-            runs = run_all(recordings, configs, budget=parsed_budget, jobs=jobs, on_done=bar)
+            runs = run_all(
+                recordings, configs, budget=parsed_budget, jobs=jobs, timeout=timeout, on_done=bar
+            )
+    runs, texts = tabulated(runs)
     try:
-        write_report(runs, out_dir)
+        write_texts(texts, out_dir)
     except OSError as err:
         raise MedkitReplayError(
             f"cannot write the fleet report: {err.strerror}", path=str(out_dir)
         ) from None
     if not quiet:
         print_summary(runs, sys.stdout, out_dir)
-    if any(run.budget == "fail" for run in runs):
+    failed = any(not run.ok or run.budget == "fail" for run in runs)
+    if parsed_budget is not None and failed:
         click.get_current_context().exit(1)

@@ -3,7 +3,9 @@ the progress bar shown while the runs go.
 
 Every file is a function of the run summaries only (no clock, no host name, no absolute path
 that was not given), so the same fleet always gives the same bytes. Text that comes from a
-recording or a path is escaped for HTML and shown literally on the terminal.
+recording or a path is escaped for HTML and shown literally on the terminal. Each file is
+written to a temporary file and renamed into place; a run the tables cannot hold becomes a
+failed row instead of costing the whole report.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.fleet.stats import codes_table, overview, runs_table
+from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -49,7 +52,9 @@ MAX_CODE_ROWS = 20
 """Codes listed on the terminal."""
 MAX_ERROR_ROWS = 20
 """Failed recordings listed on the terminal."""
-_UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+_UNPRINTABLE = re.compile(
+    r"[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069\ud800-\udfff]"
+)
 
 
 def _literal(value: object) -> str:
@@ -86,8 +91,44 @@ def to_json(frame: pd.DataFrame) -> str:
     return json.dumps(records, indent=2, ensure_ascii=False) + "\n"
 
 
-def write_report(runs: Sequence[RunSummary], out_dir: Path) -> list[Path]:
-    """Write the fleet table, the code statistics and the HTML page into ``out_dir``.
+def _texts(runs: Sequence[RunSummary]) -> dict[str, str]:
+    runs_frame = runs_table(runs)
+    codes_frame = codes_table(runs)
+    return {
+        "runs.csv": to_csv(runs_frame),
+        "runs.json": to_json(runs_frame),
+        "codes.csv": to_csv(codes_frame),
+        "codes.json": to_json(codes_frame),
+        "index.html": render_html(runs, runs_frame, codes_frame),
+    }
+
+
+def _untabulated(run: RunSummary, error: Exception) -> RunSummary:
+    from medkit_replay.fleet.run import RunSummary  # noqa: PLC0415  # no cycle at import
+
+    problem = " ".join(str(error).split())
+    what = f"{type(error).__name__}: {problem}" if problem else type(error).__name__
+    return RunSummary(path=run.path, kind=run.kind, error=f"{run.path}: cannot be reported: {what}")
+
+
+def tabulated(runs: Sequence[RunSummary]) -> tuple[list[RunSummary], dict[str, str]]:
+    """The report files' texts; a run they cannot hold (whatever the reason) is replaced by a
+    failed row saying why, so one run never costs the report of the others."""
+    kept = list(runs)
+    try:
+        return kept, _texts(kept)
+    except Exception:  # find the runs at fault, one at a time
+        for index, run in enumerate(kept):
+            try:
+                _texts([run])
+            except Exception as err:  # any of them: that run's failure
+                kept[index] = _untabulated(run, err)
+    return kept, _texts(kept)
+
+
+def write_texts(texts: dict[str, str], out_dir: Path) -> list[Path]:
+    """Write the report files (:func:`tabulated`'s texts) into ``out_dir``, each through a
+    temporary file renamed into place.
 
     Returns:
         The files written, in FILES order.
@@ -95,22 +136,27 @@ def write_report(runs: Sequence[RunSummary], out_dir: Path) -> list[Path]:
     Raises:
         OSError: the folder cannot be created or a file cannot be written.
     """
-    runs_frame = runs_table(runs)
-    codes_frame = codes_table(runs)
-    texts = {
-        "runs.csv": to_csv(runs_frame),
-        "runs.json": to_json(runs_frame),
-        "codes.csv": to_csv(codes_frame),
-        "codes.json": to_json(codes_frame),
-        "index.html": render_html(runs, runs_frame, codes_frame),
-    }
     out_dir.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     for name in FILES:
         path = out_dir / name
-        path.write_text(texts[name], encoding="utf-8", newline="\n")
+        # A lone surrogate (a file name that is not UTF-8) is written as its escape.
+        write_bytes_atomic(path, texts[name].encode("utf-8", "backslashreplace"))
         written.append(path)
     return written
+
+
+def write_report(runs: Sequence[RunSummary], out_dir: Path) -> list[Path]:
+    """Write the fleet table, the code statistics and the HTML page into ``out_dir`` (a run the
+    tables cannot hold as a failed row, see :func:`tabulated`).
+
+    Returns:
+        The files written, in FILES order.
+
+    Raises:
+        OSError: the folder cannot be created or a file cannot be written.
+    """
+    return write_texts(tabulated(runs)[1], out_dir)
 
 
 # --- HTML -------------------------------------------------------------------------------------

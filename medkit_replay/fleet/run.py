@@ -4,15 +4,24 @@
 processes (``run_all``) or on a Dask distributed cluster (``run_on_dask``). It never raises for
 a recording that cannot be replayed: the summary's ``error`` says why. Summaries come back in
 input order whatever order the runs finish in.
+
+A worker process that dies (the OOM killer, a resource limit) or a run past its ``timeout``
+costs only that run: the dead run is tried once more in a fresh worker, a run that timed out
+is killed with its worker, and the others go on.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
-from collections import Counter
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+import pickle
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter, deque
 from dataclasses import dataclass, replace
+from multiprocessing.connection import wait
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,6 +35,8 @@ from medkit_replay.result import STATUSES
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
+    from multiprocessing.connection import Connection
+    from multiprocessing.process import BaseProcess
 
     from distributed import Client
 
@@ -40,6 +51,10 @@ DASK_EXTRA_HINT = "pip install 'medkit-replay[dask]'"
 
 KINDS = {"dir": "rosbag2", ".mcap": "mcap", ".db3": "db3", ".jsonl": "script"}
 """A run's ``kind`` by READERS key: a bag directory, a bare storage file or a script."""
+ATTEMPTS = 2
+"""How often a run whose worker died is tried before it is reported as failed."""
+INT64 = range(-(2**63), 2**63)
+"""What the fleet table's integer columns hold."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -155,26 +170,54 @@ def run_one(
     Never raises for the recording's sake: an input or config problem, or any other exception
     of the replay, is the summary's ``error`` (one line).
     """
-    recording = Path(path)
-    kind = run_kind(recording)
     shown = str(path) if label is None else label
+    kind = "unknown"
     try:
+        recording = Path(path)
+        kind = run_kind(recording)
         result = replay([recording], list(configs))
         summary = summarize(shown, kind, result)
-        if budget is None:
-            return summary
-        from medkit_replay.checks import evaluate  # noqa: PLC0415  # only with a budget
+        if budget is not None:
+            from medkit_replay.checks import evaluate  # noqa: PLC0415  # only with a budget
 
-        failures = tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
-        return replace(summary, budget="fail" if failures else "pass", budget_failures=failures)
+            failures = tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
+            verdict = "fail" if failures else "pass"
+            summary = replace(summary, budget=verdict, budget_failures=failures)
+        problem = summary_problem(summary)
     except MedkitReplayError as err:
         error = err.render()
     except Exception as err:  # one recording must not end the fleet
-        error = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
+        error = f"{path}: {_describe(err)}"
+    else:
+        if problem is None:
+            return summary
+        error = f"{path}: {problem}"
     error = " ".join(error.split())
     if label is not None:
         error = error.replace(str(path), label)
     return RunSummary(path=shown, kind=kind, error=error)
+
+
+def _describe(error: BaseException) -> str:
+    """An exception on one line: its type, and its text when it has one."""
+    text = " ".join(str(error).split())
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
+def summary_problem(summary: RunSummary) -> str | None:
+    """Why the fleet table cannot hold a summary (a time at or past 2^63 ns, say), or None; such
+    a run is reported as failed rather than costing the whole report."""
+    times = [summary.start_ns, summary.end_ns, *(t for _, t in summary.confirmed)]
+    for t_ns in times:
+        if t_ns is not None and t_ns not in INT64:
+            return f"bag time {t_ns} ns is out of range (from -2^63 up to 2^63 ns)"
+    for _, ns in summary.heals:
+        if ns not in INT64:
+            return f"a heal after {ns} ns is out of range"
+    span = summary.span_ns
+    if span is not None and span not in INT64:
+        return f"a recording spanning {span} ns is out of range"
+    return None
 
 
 def check_configs(configs: Sequence[str | Path]) -> None:
@@ -189,13 +232,10 @@ def check_configs(configs: Sequence[str | Path]) -> None:
     replay_options(params)
 
 
-def _failed(path: Path, error: BaseException) -> RunSummary:
-    text = " ".join(str(error).split())
-    return RunSummary(
-        path=str(path),
-        kind=run_kind(path),
-        error=f"{type(error).__name__}: {text}" if text else type(error).__name__,
-    )
+def _failed(path: Path, error: BaseException | str) -> RunSummary:
+    """A run that failed outside ``run_one`` (its worker died or ran out of time)."""
+    problem = error if isinstance(error, str) else _describe(error)
+    return RunSummary(path=str(path), kind=run_kind(path), error=f"{path}: {problem}")
 
 
 def default_jobs() -> int:
@@ -213,25 +253,111 @@ def _context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
+def _serve(connection: Connection, configs: tuple[Path, ...], budget: Budget | None) -> None:
+    """A worker process: replay each ``(index, path)`` it is sent, send back its summary."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    while True:
+        try:
+            job = connection.recv()
+        except (EOFError, OSError):
+            return
+        if job is None:
+            return
+        index, path = job
+        connection.send((index, run_one(path, configs, budget)))
+
+
+def death_text(exitcode: int | None) -> str:
+    """How a worker process ended, for a run's error: ``killed by SIGKILL``, ``exited with
+    status 3``."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            name = signal.Signals(-exitcode).name
+        except ValueError:
+            name = f"signal {-exitcode}"
+        return f"killed by {name}"
+    if exitcode:
+        return f"exited with status {exitcode}"
+    return "exited unexpectedly"
+
+
+def seconds_text(seconds: float) -> str:
+    """A timeout as the user gave it: ``0.2``, ``60``."""
+    return f"{seconds:g}"
+
+
+class _Worker:
+    """One worker process, the pipe to it, and the run it is busy with."""
+
+    def __init__(
+        self,
+        context: multiprocessing.context.BaseContext,
+        configs: tuple[Path, ...],
+        budget: Budget | None,
+    ) -> None:
+        parent, child = context.Pipe()
+        self.connection: Connection = parent
+        self.process: BaseProcess = context.Process(  # type: ignore[attr-defined]
+            target=_serve, args=(child, configs, budget), daemon=True
+        )
+        self.process.start()
+        child.close()
+        self.index: int | None = None
+        self.deadline: float | None = None
+
+    def give(self, index: int, path: Path, timeout: float | None) -> None:
+        self.connection.send((index, path))
+        self.index = index
+        self.deadline = None if timeout is None else time.monotonic() + timeout
+
+    def take(self) -> RunSummary | None:
+        """The finished run's summary, or None when the worker died before sending it whole."""
+        try:
+            _, summary = self.connection.recv()
+        except Exception:  # EOFError, a truncated pickle: it died while sending
+            return None
+        self.index = self.deadline = None
+        return summary  # type: ignore[no-any-return]
+
+    def stop(self, *, kill: bool = False) -> None:
+        """End the process (at once with ``kill``, else when it has read its last job)."""
+        if not kill:
+            try:
+                self.connection.send(None)
+            except OSError:
+                kill = True
+        if kill and self.process.is_alive():
+            self.process.kill()
+        self.process.join(timeout=None if kill else 5)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join()
+        self.connection.close()
+
+
 def run_all(
     paths: Sequence[Path],
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,
     jobs: int | None = None,
+    timeout: float | None = None,
     on_done: Callable[[int, RunSummary], None] | None = None,
 ) -> list[RunSummary]:
-    """Run every recording, ``jobs`` at a time in worker processes (1: in this process).
+    """Run every recording, ``jobs`` at a time in worker processes (1 and no ``timeout``: in
+    this process).
 
     Args:
         paths: the recordings.
         configs: the ROS 2 parameter files, the same for every run.
         budget: a fault budget checked on every run, if any.
         jobs: worker processes (default: one per CPU; never more than recordings).
+        timeout: seconds a run may take; a run past it is killed and reported as failed.
         on_done: called in this process as each run ends, with its index and summary.
 
     Returns:
-        One summary per path, in the order of ``paths``.
+        One summary per path, in the order of ``paths``. A run whose worker died twice (see
+        ``ATTEMPTS``) or that timed out is a failed summary naming why.
     """
     workers = min(jobs or default_jobs(), len(paths))
     results: list[RunSummary | None] = [None] * len(paths)
@@ -241,26 +367,132 @@ def run_all(
         if on_done is not None:
             on_done(index, summary)
 
-    if workers <= 1:
+    if workers <= 1 and timeout is None:
         for index, path in enumerate(paths):
             done(index, run_one(path, configs, budget))
         return [r for r in results if r is not None]
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=_context())
-    try:
-        futures: dict[Future[RunSummary], int] = {
-            pool.submit(run_one, path, tuple(configs), budget): index
-            for index, path in enumerate(paths)
-        }
-        for future in as_completed(futures):
-            index = futures[future]
-            try:
-                summary = future.result()
-            except Exception as err:  # a worker that died (BrokenProcessPool), unpicklable data
-                summary = _failed(paths[index], err)
-            done(index, summary)
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    _run_in_workers(paths, tuple(configs), budget, max(workers, 1), timeout, done)
     return [r for r in results if r is not None]
+
+
+def _run_in_workers(
+    paths: Sequence[Path],
+    configs: tuple[Path, ...],
+    budget: Budget | None,
+    count: int,
+    timeout: float | None,
+    done: Callable[[int, RunSummary], None],
+) -> None:
+    """Hand runs to ``count`` worker processes one at a time; replace a worker that dies
+    (its run tried again, up to ATTEMPTS) or runs out of time (its run failed)."""
+    context = _context()
+    pending = deque(range(len(paths)))
+    attempts = [0] * len(paths)
+    remaining = len(paths)
+    pool: list[_Worker] = []
+    try:
+        while remaining:
+            while pending and len(pool) < count:
+                pool.append(_Worker(context, configs, budget))
+            for worker in pool:
+                if worker.index is None and pending:
+                    job = pending.popleft()
+                    attempts[job] += 1
+                    try:
+                        worker.give(job, paths[job], timeout)
+                    except OSError:  # it died idle; the sentinel below says so
+                        worker.index = job
+            busy = [w for w in pool if w.index is not None]
+            waiting: list[object] = [w.connection for w in busy]
+            waiting += [w.process.sentinel for w in busy]
+            wait_for = None
+            if timeout is not None:
+                deadlines = [w.deadline for w in busy if w.deadline is not None]
+                wait_for = max(min(deadlines) - time.monotonic(), 0) if deadlines else None
+            if not waiting:
+                break  # cannot happen: every run is pending, busy or done
+            ready = set(wait(waiting, wait_for))  # type: ignore[arg-type]
+            now = time.monotonic()
+            for worker in busy:
+                index = worker.index
+                assert index is not None
+                if worker.connection in ready:
+                    summary = worker.take()
+                    if summary is not None:
+                        remaining -= 1
+                        done(index, summary)
+                        continue
+                elif worker.process.sentinel not in ready:
+                    if worker.deadline is None or now < worker.deadline:
+                        continue
+                    worker.stop(kill=True)
+                    pool.remove(worker)
+                    remaining -= 1
+                    done(
+                        index,
+                        _failed(paths[index], f"timed out after {seconds_text(timeout or 0)} s"),
+                    )
+                    continue
+                worker.process.join()
+                how = death_text(worker.process.exitcode)
+                worker.stop(kill=True)
+                pool.remove(worker)
+                if attempts[index] < ATTEMPTS:
+                    pending.appendleft(index)
+                    continue
+                remaining -= 1
+                tries = " (also when run again in a new worker)" if ATTEMPTS > 1 else ""
+                done(index, _failed(paths[index], f"worker died: {how}{tries}"))
+    finally:
+        for worker in pool:
+            worker.stop(kill=worker.index is not None)
+
+
+_CHILD = "from medkit_replay.fleet.run import serve_one; serve_one()"
+
+
+def serve_one() -> None:
+    """The child of :func:`run_isolated`: one pickled job on standard input, its summary
+    pickled on standard output."""
+    path, configs, budget, label = pickle.load(sys.stdin.buffer)  # from our own parent
+    summary = run_one(path, configs, budget, label)
+    sys.stdout.buffer.write(pickle.dumps(summary, protocol=pickle.HIGHEST_PROTOCOL))
+    sys.stdout.buffer.flush()
+
+
+def run_isolated(
+    path: str | Path,
+    configs: Sequence[str | Path] = (),
+    budget: Budget | None = None,
+    label: str | None = None,
+    timeout: float | None = None,
+) -> RunSummary:
+    """``run_one`` in a child process of its own, killed after ``timeout`` seconds: what a Dask
+    task runs when the fleet has a per-run timeout (a thread cannot be stopped, and a daemonic
+    Dask worker may not use multiprocessing). A child that dies or runs out of time is this
+    run's failure."""
+    shown = str(path) if label is None else label
+    job = pickle.dumps((str(path), tuple(str(c) for c in configs), budget, label))
+    try:
+        done = subprocess.run(  # our own interpreter and module
+            [sys.executable, "-c", _CHILD],
+            input=job,
+            capture_output=True,
+            timeout=timeout,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        problem = f"timed out after {seconds_text(timeout or 0)} s"
+    else:
+        if done.returncode == 0:
+            try:
+                summary = pickle.loads(done.stdout)  # from our own child
+            except Exception:  # a truncated pickle: the child did not finish
+                summary = None
+            if isinstance(summary, RunSummary):
+                return summary
+        problem = f"worker died: {death_text(done.returncode)}"
+    return RunSummary(path=shown, kind=run_kind(Path(path)), error=f"{shown}: {problem}")
 
 
 def run_on_dask(
@@ -269,6 +501,7 @@ def run_on_dask(
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,
+    timeout: float | None = None,
     on_done: Callable[[int, RunSummary], None] | None = None,
 ) -> list[RunSummary]:
     """Run every recording on a Dask distributed cluster, with the same ``run_one``.
@@ -276,7 +509,8 @@ def run_on_dask(
     The workers need medkit-replay installed and the recordings and configs at the same
     absolute paths (a shared file system); they are sent absolute paths, and the summaries
     come back named as found (``run_one``'s ``label``), so the report is the same as
-    ``run_all``'s.
+    ``run_all``'s. With a ``timeout``, each task runs its recording in a child process
+    (:func:`run_isolated`) that is killed when the time is up.
 
     Raises:
         MedkitReplayError: the ``distributed`` package is missing, or the scheduler cannot be
@@ -295,14 +529,17 @@ def run_on_dask(
     results: list[RunSummary | None] = [None] * len(paths)
     try:
         absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
-        futures = client.map(
-            run_one,
+        arguments: list[list[object]] = [
             [str(p.absolute()) for p in paths],
             [absolute_configs] * len(paths),
             [budget] * len(paths),
             [str(p) for p in paths],
-            pure=False,
-        )
+        ]
+        if timeout is None:
+            futures = client.map(run_one, *arguments, pure=False)
+        else:
+            arguments.append([timeout] * len(paths))
+            futures = client.map(run_isolated, *arguments, pure=False)
         index_of = {future.key: index for index, future in enumerate(futures)}
         for future in dask_as_completed(futures, loop=client.loop):  # type: ignore[no-untyped-call]
             index = index_of[future.key]

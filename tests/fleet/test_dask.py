@@ -96,13 +96,13 @@ def test_missing_extra_is_one_line_naming_it(
 def test_unreachable_scheduler_is_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    write_script(tmp_path / "a.jsonl", [line for _, line in episode("A", 1.0, None)])
+    write_script(tmp_path / "in" / "a.jsonl", [line for _, line in episode("A", 1.0, None)])
     with socket.socket() as probe:  # a port nobody listens on
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     monkeypatch.setattr(fleet_run, "DASK_CONNECT_TIMEOUT", "1s")
     address = f"tcp://127.0.0.1:{port}"
-    status = main(["fleet", str(tmp_path), "--dask", address, "--out", str(tmp_path / "o")])
+    status = main(["fleet", str(tmp_path / "in"), "--dask", address, "--out", str(tmp_path / "o")])
     out, err = capsys.readouterr()
     assert status == 2 and out == ""
     assert err.startswith(f"medkit-replay: error: {address}: cannot reach the Dask scheduler")

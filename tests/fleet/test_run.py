@@ -94,7 +94,7 @@ def test_any_exception_is_reported_on_one_line(
 
     monkeypatch.setattr(fleet_run, "replay", explode)
     run = run_one(tmp_path / "x.jsonl")
-    assert run.error == "RuntimeError: boom on two lines"
+    assert run.error == f"{tmp_path / 'x.jsonl'}: RuntimeError: boom on two lines"
 
 
 def test_label_names_the_run_and_its_error(tmp_path: Path) -> None:
@@ -159,4 +159,4 @@ def test_default_jobs_is_at_least_one() -> None:
 
 def test_failed_summary_of_a_lost_worker() -> None:
     run = fleet_run._failed(Path("x.mcap"), RuntimeError("worker\nlost"))
-    assert run == RunSummary(path="x.mcap", kind="mcap", error="RuntimeError: worker lost")
+    assert run == RunSummary(path="x.mcap", kind="mcap", error="x.mcap: RuntimeError: worker lost")
