@@ -9,7 +9,9 @@ Rules (README "Fleets"):
   metadata was written);
 - any other ``.mcap`` or ``.db3`` file is a bare recording of its own, and a ``.jsonl`` file a
   script;
-- hidden files and folders (``.name``) are skipped; symbolic links are followed once.
+- hidden files and folders (``.name``) are skipped; symbolic links are followed once;
+- a FIFO, device or socket named like a recording is listed too: its run says why it cannot
+  be read (never skipped in silence, never opened).
 
 The order is deterministic: the given folders in order, each one's recordings sorted by path
 (numbers in names compared as numbers); a recording reached twice is listed once.
@@ -95,8 +97,10 @@ def _walk(root: Path) -> list[Path]:
         if is_bag_directory(directory, files):
             found.append(directory)
             continue
-        found += [f for f in files if input_kind(f) in FILE_KINDS]
-        pending += [e for e in entries if e.is_dir()]
+        folders = [e for e in entries if e.is_dir()]
+        others = [e for e in entries if e not in files and e not in folders]
+        found += [f for f in (*files, *others) if input_kind(f) in FILE_KINDS]
+        pending += folders
     return found
 
 

@@ -20,15 +20,17 @@ import subprocess
 import sys
 import time
 from collections import Counter, deque
+from contextlib import suppress
 from dataclasses import dataclass, replace
 from multiprocessing.connection import wait
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.errors import MedkitReplayError
+from medkit_replay.files import FileRefusedError, check_regular
 from medkit_replay.inputs.recording import input_kind
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
@@ -53,6 +55,8 @@ KINDS = {"dir": "rosbag2", ".mcap": "mcap", ".db3": "db3", ".jsonl": "script"}
 """A run's ``kind`` by READERS key: a bag directory, a bare storage file or a script."""
 ATTEMPTS = 2
 """How often a run whose worker died is tried before it is reported as failed."""
+READY = "ready"
+"""What a worker process sends once it has started."""
 INT64 = range(-(2**63), 2**63)
 """What the fleet table's integer columns hold."""
 
@@ -175,6 +179,8 @@ def run_one(
     try:
         recording = Path(path)
         kind = run_kind(recording)
+        if recording.exists() and not recording.is_dir():
+            check_regular(recording)  # a FIFO named like a recording would block its reader
         result = replay([recording], list(configs))
         summary = summarize(shown, kind, result)
         if budget is not None:
@@ -186,6 +192,8 @@ def run_one(
         problem = summary_problem(summary)
     except MedkitReplayError as err:
         error = err.render()
+    except FileRefusedError as err:
+        error = f"{path}: {err}"
     except Exception as err:  # one recording must not end the fleet
         error = f"{path}: {_describe(err)}"
     else:
@@ -254,8 +262,10 @@ def _context() -> multiprocessing.context.BaseContext:
 
 
 def _serve(connection: Connection, configs: tuple[Path, ...], budget: Budget | None) -> None:
-    """A worker process: replay each ``(index, path)`` it is sent, send back its summary."""
+    """A worker process: say it is ready, then replay each ``(index, path)`` it is sent and
+    send back its summary."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    connection.send(READY)
     while True:
         try:
             job = connection.recv()
@@ -302,22 +312,22 @@ class _Worker:
         )
         self.process.start()
         child.close()
+        self.ready = False
+        """It has started (imports done) and waits for a job: a run's time starts when given."""
         self.index: int | None = None
         self.deadline: float | None = None
 
     def give(self, index: int, path: Path, timeout: float | None) -> None:
-        self.connection.send((index, path))
         self.index = index
         self.deadline = None if timeout is None else time.monotonic() + timeout
+        self.connection.send((index, path))
 
-    def take(self) -> RunSummary | None:
-        """The finished run's summary, or None when the worker died before sending it whole."""
+    def receive(self) -> object:
+        """What the worker sent; None when it died before sending it whole."""
         try:
-            _, summary = self.connection.recv()
+            return self.connection.recv()
         except Exception:  # EOFError, a truncated pickle: it died while sending
             return None
-        self.index = self.deadline = None
-        return summary  # type: ignore[no-any-return]
 
     def stop(self, *, kill: bool = False) -> None:
         """End the process (at once with ``kill``, else when it has read its last job)."""
@@ -390,45 +400,50 @@ def _run_in_workers(
     attempts = [0] * len(paths)
     remaining = len(paths)
     pool: list[_Worker] = []
+    stillborn = 0
+
+    def finish(index: int, summary: RunSummary) -> None:
+        nonlocal remaining
+        remaining -= 1
+        done(index, summary)
+
     try:
         while remaining:
             while pending and len(pool) < count:
                 pool.append(_Worker(context, configs, budget))
             for worker in pool:
-                if worker.index is None and pending:
+                if worker.ready and worker.index is None and pending:
                     job = pending.popleft()
                     attempts[job] += 1
-                    try:
+                    with suppress(OSError):  # it died idle: its sentinel says so below
                         worker.give(job, paths[job], timeout)
-                    except OSError:  # it died idle; the sentinel below says so
-                        worker.index = job
-            busy = [w for w in pool if w.index is not None]
-            waiting: list[object] = [w.connection for w in busy]
-            waiting += [w.process.sentinel for w in busy]
-            wait_for = None
-            if timeout is not None:
-                deadlines = [w.deadline for w in busy if w.deadline is not None]
-                wait_for = max(min(deadlines) - time.monotonic(), 0) if deadlines else None
-            if not waiting:
+            watched = [w for w in pool if w.index is not None or not w.ready]
+            if not watched:
                 break  # cannot happen: every run is pending, busy or done
-            ready = set(wait(waiting, wait_for))  # type: ignore[arg-type]
+            waiting: list[Any] = [w.connection for w in watched]
+            waiting += [w.process.sentinel for w in watched]
+            deadlines = [w.deadline for w in watched if w.deadline is not None]
+            wait_for = max(min(deadlines) - time.monotonic(), 0) if deadlines else None
+            ready = set(wait(waiting, wait_for))
             now = time.monotonic()
-            for worker in busy:
+            for worker in watched:
                 index = worker.index
-                assert index is not None
                 if worker.connection in ready:
-                    summary = worker.take()
-                    if summary is not None:
-                        remaining -= 1
-                        done(index, summary)
+                    message = worker.receive()
+                    if message == READY and not worker.ready:
+                        worker.ready = True
+                        stillborn = 0
+                        continue
+                    if isinstance(message, tuple) and index is not None:
+                        worker.index = worker.deadline = None
+                        finish(index, message[1])
                         continue
                 elif worker.process.sentinel not in ready:
-                    if worker.deadline is None or now < worker.deadline:
+                    if worker.deadline is None or now < worker.deadline or index is None:
                         continue
                     worker.stop(kill=True)
                     pool.remove(worker)
-                    remaining -= 1
-                    done(
+                    finish(
                         index,
                         _failed(paths[index], f"timed out after {seconds_text(timeout or 0)} s"),
                     )
@@ -437,15 +452,21 @@ def _run_in_workers(
                 how = death_text(worker.process.exitcode)
                 worker.stop(kill=True)
                 pool.remove(worker)
+                if index is None:
+                    stillborn += 1
+                    if stillborn >= ATTEMPTS + 1:  # workers cannot even start: say so per run
+                        while pending:
+                            job = pending.popleft()
+                            finish(job, _failed(paths[job], f"worker died at start: {how}"))
+                    continue
                 if attempts[index] < ATTEMPTS:
                     pending.appendleft(index)
                     continue
-                remaining -= 1
                 tries = " (also when run again in a new worker)" if ATTEMPTS > 1 else ""
-                done(index, _failed(paths[index], f"worker died: {how}{tries}"))
+                finish(index, _failed(paths[index], f"worker died: {how}{tries}"))
     finally:
         for worker in pool:
-            worker.stop(kill=worker.index is not None)
+            worker.stop(kill=worker.index is not None or not worker.ready)
 
 
 _CHILD = "from medkit_replay.fleet.run import serve_one; serve_one()"
