@@ -78,11 +78,13 @@ class CheckRun:
     budget: Budget
     verdicts: tuple[Verdict, ...]
     warnings: tuple[str, ...] = ()
+    error: str | None = None
+    """Why the run could not be replayed (one line); then it has no verdicts and fails."""
 
     @property
     def passed(self) -> bool:
-        """Every rule held."""
-        return all(v.passed for v in self.verdicts)
+        """The run was replayed and every rule held."""
+        return self.error is None and all(v.passed for v in self.verdicts)
 
     @property
     def failures(self) -> tuple[Verdict, ...]:
@@ -98,6 +100,13 @@ def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun
         budget=budget,
         verdicts=evaluate(budget, result),
         warnings=result.warnings,
+    )
+
+
+def unreadable_run(budget: Budget, inputs: Sequence[str], error: str) -> CheckRun:
+    """A run whose recording could not be replayed: no verdicts, failed, saying why."""
+    return CheckRun(
+        label=" + ".join(inputs), inputs=tuple(inputs), budget=budget, verdicts=(), error=error
     )
 
 

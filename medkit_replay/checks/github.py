@@ -62,6 +62,9 @@ def workflow_commands(runs: Sequence[CheckRun]) -> list[str]:
     """The annotation lines, one command per line, in run and rule order."""
     commands: list[str] = []
     for run in runs:
+        if run.error is not None:
+            title = escape_property(printable(f"recording cannot be read ({run.label})"))
+            commands.append(f"::error title={title}::{escape_data(printable(run.error))}")
         for verdict in run.failures:
             rule = verdict.rule
             where = f"file={escape_property(run.budget.path)}"
@@ -85,14 +88,21 @@ def _cell(verdict: Verdict) -> str:
 def step_summary(runs: Sequence[CheckRun]) -> str:
     """The Markdown page appended to ``$GITHUB_STEP_SUMMARY``: a verdict table per run."""
     held = all(run.passed for run in runs)
+    unreadable = any(run.error is not None for run in runs)
     budget = runs[0].budget if runs else None
-    lines = [
-        "## medkit-replay check: " + ("budget holds ✅" if held else "budget exceeded ❌"),
-        "",
-    ]
+    headline = "budget exceeded ❌" if not unreadable else "a recording cannot be read ❌"
+    lines = ["## medkit-replay check: " + ("budget holds ✅" if held else headline), ""]
     if budget is not None:
         lines += [f"Budget: {markdown(budget.title)} ({markdown(budget.path)})", ""]
     for run in runs:
+        if run.error is not None:
+            lines += [
+                f"### ❌ {markdown(run.label)}: cannot be read",
+                "",
+                f"- {markdown(run.error)}",
+                "",
+            ]
+            continue
         failed = len(run.failures)
         state = f"{failed} of {len(run.verdicts)} rules failed" if failed else "all rules passed"
         lines += [

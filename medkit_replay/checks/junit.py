@@ -1,7 +1,9 @@
 """Budget verdicts as JUnit XML: one testsuite per run, one testcase per rule.
 
 A failed rule is a ``<failure>`` whose ``message`` names the offending faults on one line and
-whose text lists them one per line. Written with xml.etree; text XML cannot hold is escaped.
+whose text lists them one per line. A run whose recording cannot be read has one testcase with
+an ``<error>`` saying why. Written with xml.etree; text XML cannot hold is escaped; the file is
+written through a temporary file renamed into place.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING
 
 from medkit_replay.checks.text import xml_text
+from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -20,6 +23,8 @@ if TYPE_CHECKING:
 
 MAX_IN_MESSAGE = 20
 """Offending faults named in a failure's one-line message; its text lists every one."""
+UNREADABLE_CASE = "the recording can be read"
+"""The testcase of a run whose recording could not be replayed."""
 
 
 def failure_message(verdict: Verdict) -> str:
@@ -54,17 +59,33 @@ def _testcase(suite: ET.Element, run: CheckRun, verdict: Verdict) -> None:
     failure.text = xml_text("\n".join(lines))
 
 
+def _unreadable_case(suite: ET.Element, run: CheckRun, error: str) -> None:
+    case = ET.SubElement(
+        suite,
+        "testcase",
+        {
+            "name": UNREADABLE_CASE,
+            "classname": xml_text(run.label),
+            "file": xml_text(run.inputs[0]),
+        },
+    )
+    ET.SubElement(
+        case, "error", {"message": xml_text(error), "type": "unreadable"}
+    ).text = xml_text(error)
+
+
 def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
     """The JUnit document of a check: its ``testsuites`` root element, indented."""
-    tests = sum(len(r.verdicts) for r in runs)
+    tests = sum(len(r.verdicts) if r.error is None else 1 for r in runs)
     failures = sum(len(r.failures) for r in runs)
+    errors = sum(1 for r in runs if r.error is not None)
     root = ET.Element(
         "testsuites",
         {
             "name": "medkit-replay check",
             "tests": str(tests),
             "failures": str(failures),
-            "errors": "0",
+            "errors": str(errors),
         },
     )
     for run in runs:
@@ -73,9 +94,9 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
             "testsuite",
             {
                 "name": xml_text(run.label),
-                "tests": str(len(run.verdicts)),
+                "tests": str(len(run.verdicts) if run.error is None else 1),
                 "failures": str(len(run.failures)),
-                "errors": "0",
+                "errors": "0" if run.error is None else "1",
                 "skipped": "0",
             },
         )
@@ -84,6 +105,8 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
         entries += [("input", path) for path in run.inputs]
         for name, value in entries:
             ET.SubElement(properties, "property", {"name": name, "value": xml_text(value)})
+        if run.error is not None:
+            _unreadable_case(suite, run, run.error)
         for verdict in run.verdicts:
             _testcase(suite, run, verdict)
         if run.warnings:
@@ -93,5 +116,6 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
 
 
 def write_junit(runs: Sequence[CheckRun], path: Path) -> None:
-    """Write the JUnit XML file (UTF-8, with an XML declaration)."""
-    ET.ElementTree(junit_element(runs)).write(path, encoding="utf-8", xml_declaration=True)
+    """Write the JUnit XML file (UTF-8, with an XML declaration), whole or not at all."""
+    text = ET.tostring(junit_element(runs), encoding="utf-8", xml_declaration=True)
+    write_bytes_atomic(path, text)

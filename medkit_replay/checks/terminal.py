@@ -52,7 +52,18 @@ def _verdict_rows(grid: Table, verdict: Verdict) -> None:
 
 
 def run_renderable(run: CheckRun) -> list[RenderableType]:
-    """The verdicts of one run: a heading, a line per rule, the replay's warnings."""
+    """The verdicts of one run: a heading, a line per rule, the replay's warnings (or why the
+    recording could not be read)."""
+    if run.error is not None:
+        head = Text("check ", style="bold")
+        head.append(printable(run.label), style="bold")
+        head.append(f" against {printable(run.budget.title)}: ")
+        head.append("not checked, the recording cannot be read", style="bold red")
+        grid = Table.grid(padding=(0, 1))
+        grid.add_column(no_wrap=True)
+        grid.add_column(overflow="fold")
+        grid.add_row(Text("ERROR", style="bold red"), Text(printable(run.error), style="red"))
+        return [head, grid, Text("")]
     failed = len(run.failures)
     head = Text("check ", style="bold")
     head.append(printable(run.label), style="bold")
@@ -72,7 +83,16 @@ def run_renderable(run: CheckRun) -> list[RenderableType]:
 
 
 def conclusion(runs: Sequence[CheckRun]) -> Text:
-    """The last line: whether the budget held on every run."""
+    """The last line: whether the budget held on every run (a run that could not be read
+    never holds it)."""
+    unreadable = [r for r in runs if r.error is not None]
+    if unreadable:
+        text = f"check failed: {len(unreadable)} of {_plural(len(runs), 'run')} could not be read"
+        over = [r for r in runs if r.error is None and not r.passed]
+        if over:
+            failures = sum(len(r.failures) for r in over)
+            text += f"; {_plural(failures, 'rule verdict')} failed in {len(over)}"
+        return Text(text, style="bold red")
     failed_runs = [r for r in runs if not r.passed]
     rules = len(runs[0].verdicts) if runs else 0
     if not failed_runs:

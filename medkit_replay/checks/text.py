@@ -1,15 +1,21 @@
 """Text from recordings and configs made safe for one line of a terminal, a log or an XML file.
 
 Fault codes, cluster ids, paths and warnings are untrusted: nothing they hold may move a
-cursor, recolour a terminal, reorder text or end a line where a reader does not expect it.
+cursor, recolour a terminal, reorder text (bidirectional controls, the Arabic letter mark
+U+061C) or end a line where a reader does not expect it (U+2028, U+2029).
 """
 
 from __future__ import annotations
 
 import re
 
-_UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029\u200e\u200f\u202a-\u202e\u2066-\u2069]")
-_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+_BIDI = "\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
+_UNPRINTABLE = re.compile(f"[\\x00-\\x1f\\x7f-\\x9f\\u2028\\u2029{_BIDI}\\ud800-\\udfff]")
+# Besides what XML 1.0 forbids (NUL, ESC, lone surrogates): C1 controls, line and paragraph
+# separators and bidirectional controls, which XML allows but a CI page would act on.
+_NOT_XML = re.compile(
+    f"[^\t\n\r\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|[\u2028\u2029{_BIDI}]"
+)
 
 
 def _escape_char(char: str) -> str:
@@ -18,7 +24,8 @@ def _escape_char(char: str) -> str:
 
 def printable(text: str) -> str:
     """One line: line breaks and tabs become spaces, other control and bidirectional-override
-    characters are shown as escapes (``\\x1b``)."""
+    characters, line and paragraph separators and lone surrogates are shown as escapes
+    (``\\x1b``, ``\\u202e``)."""
 
     def replace(match: re.Match[str]) -> str:
         char = match.group()
@@ -28,5 +35,6 @@ def printable(text: str) -> str:
 
 
 def xml_text(text: str) -> str:
-    """Text XML 1.0 can hold: characters it forbids (NUL, ESC, lone surrogates) as escapes."""
+    """Text XML 1.0 can hold, and a CI page shows as it is: characters XML forbids (NUL, ESC,
+    lone surrogates), C1 controls, U+2028, U+2029 and bidirectional controls as escapes."""
     return _NOT_XML.sub(lambda m: _escape_char(m.group()), text)

@@ -1,26 +1,38 @@
-"""``medkit-replay check``: replay recordings and hold them to a fault budget (exit 1 if exceeded).
+"""``medkit-replay check``: replay recordings and hold them to a fault budget (exit 1 if exceeded
+or if a recording cannot be read).
 
 Thin: the budget, the verdicts and their outputs live in medkit_replay.checks.
 """
 
 from __future__ import annotations
 
+import errno
 import os
+import stat
 import sys
 from contextlib import nullcontext
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from medkit_replay.checks.budget import load_budget
-from medkit_replay.checks.evaluate import CheckRun, check_run
+from medkit_replay.checks.evaluate import CheckRun, check_run, unreadable_run
 from medkit_replay.checks.github import step_summary, workflow_commands
 from medkit_replay.checks.junit import write_junit
 from medkit_replay.checks.terminal import print_conclusion, print_run
 from medkit_replay.commands import config_option
-from medkit_replay.errors import MedkitReplayError
+from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
+from medkit_replay.files import FileRefusedError, check_regular
+from medkit_replay.fleet.run import check_configs
+from medkit_replay.outputs.atomic import refuse_overlap
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.pipeline import replay
+
+if TYPE_CHECKING:
+    from medkit_replay.checks.budget import Budget
+
+SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
 
 
 @click.command()
@@ -63,7 +75,8 @@ def check(
     """Replay each INPUT and check it against a fault budget.
 
     Each INPUT is its own run (one mission per recording) unless --merge is given. Exit
-    status: 0 every rule holds on every run, 1 the budget is exceeded, 2 bad input or config.
+    status: 0 every rule holds on every run, 1 the budget is exceeded or a recording cannot be
+    read, 2 bad usage, budget or config, or an INPUT that does not exist.
 
     \b
     Examples:
@@ -71,13 +84,19 @@ def check(
       medkit-replay check runs/*.mcap --budget budget.yaml --junit budget.xml --github
     """
     budget = load_budget(budget_path)  # a bad budget fails before any replay
+    check_configs(configs)  # so does a bad config
+    for path in inputs:
+        if not os.path.lexists(path):
+            raise InputError("input not found", path=str(path))
+    summary_path = os.environ.get(SUMMARY_ENV) if github else None
+    outputs = [("--junit", junit_out)] if junit_out is not None else []
+    if summary_path:
+        outputs.append((f"${SUMMARY_ENV}", Path(summary_path)))
+    refuse_overlap([*inputs, *configs, budget_path], outputs)
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
     for group in groups:
-        bar = progress_bar(sys.stderr)
-        with bar if bar is not None else nullcontext():
-            result = replay(group, configs, progress=bar)
-        run = check_run(budget, result, [str(path) for path in group])
+        run = _check_group(budget, group, configs)
         runs.append(run)
         print_run(run, sys.stdout)
     print_conclusion(runs, sys.stdout)
@@ -94,16 +113,59 @@ def check(
         ctx.exit(1)
 
 
+def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -> CheckRun:
+    """Replay one run and check it; a recording that cannot be read is a failed run saying why
+    (a config problem is still the whole command's, exit 2)."""
+    labels = [str(path) for path in group]
+    try:
+        for path in group:
+            if not path.is_dir():
+                check_regular(path)  # a FIFO would block its reader
+        bar = progress_bar(sys.stderr)
+        with bar if bar is not None else nullcontext():
+            result = replay(group, configs, progress=bar)
+    except ConfigError:
+        raise
+    except MedkitReplayError as err:
+        error = err.render()
+    except FileRefusedError as err:
+        error = f"{path}: {err}"
+    except Exception as err:  # whatever the recording makes the replay raise: it failed
+        text = " ".join(str(err).split())
+        error = f"{' + '.join(labels)}: {type(err).__name__}" + (f": {text}" if text else "")
+    else:
+        return check_run(budget, result, labels)
+    return unreadable_run(budget, labels, " ".join(error.split()))
+
+
 def _github(runs: list[CheckRun]) -> None:
     for command in workflow_commands(runs):
         sys.stdout.write(command + "\n")
-    summary_path = os.environ.get("GITHUB_STEP_SUMMARY")
+    summary_path = os.environ.get(SUMMARY_ENV)
     if not summary_path:
         return
     try:
-        with Path(summary_path).open("a", encoding="utf-8") as stream:
-            stream.write(step_summary(runs))
+        append_whole(Path(summary_path), step_summary(runs).encode("utf-8", "backslashreplace"))
     except OSError as err:
         raise MedkitReplayError(
             f"cannot append the step summary: {err.strerror}", path=summary_path
         ) from None
+
+
+def append_whole(path: Path, data: bytes) -> None:
+    """Append ``data`` to a file in one write; if it cannot all be written (a full disk), the
+    file is cut back to its old length, so a failed append leaves nothing behind."""
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_CLOEXEC, 0o666)
+    try:
+        info = os.fstat(fd)
+        regular = stat.S_ISREG(info.st_mode)
+        try:
+            written = os.write(fd, data)
+            if written != len(data):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        except BaseException:
+            if regular:
+                os.ftruncate(fd, info.st_size)
+            raise
+    finally:
+        os.close(fd)

@@ -98,15 +98,22 @@ def test_exit_2_on_bad_budget_config_or_usage(
     assert len(err.strip().splitlines()) <= 3  # one line (click adds its usage lines)
 
 
-def test_exit_2_on_an_unreadable_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_an_unreadable_input_fails_the_check(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A recording that cannot be read never passes: exit 1, the reason in the output (issue
+    14); an input that does not exist is bad usage, exit 2."""
     budget = write_budget(tmp_path, PASSING)
     broken = tmp_path / "broken.jsonl"
     broken.write_text('{"t_ns": 1, "op": "explode"}\n', encoding="utf-8")
-    status, _, err = run(["check", str(broken), "--budget", str(budget)], capsys)
-    assert status == 2
-    assert err.startswith(f"medkit-replay: error: {broken}:1: ")
+    status, out, err = run(["check", str(broken), "--budget", str(budget)], capsys)
+    assert status == 1
+    assert f"ERROR {broken}:1: " in out
+    assert "check failed: 1 of 1 run could not be read" in out
+    assert err == ""
     status, _, err = run(["check", str(tmp_path / "absent.mcap"), "--budget", str(budget)], capsys)
     assert status == 2
+    assert "absent.mcap: input not found" in err
 
 
 def test_a_bad_budget_fails_before_any_replay(
@@ -216,7 +223,7 @@ def test_junit_holds_any_recorded_text(tmp_path: Path, capsys: pytest.CaptureFix
     assert "\x1b" not in out and "\u202e" not in out
     assert "run <&> \\x1b[31m\\u202e .jsonl against budget.yaml" in out
     (suite,) = list(JUnitXml.fromfile(str(junit)))
-    assert suite.name == str(odd).replace("\x1b", "\\x1b")
+    assert suite.name == str(odd).replace("\x1b", "\\x1b").replace("\u202e", "\\u202e")
     assert suite.failures == 2
 
 
