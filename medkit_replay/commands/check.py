@@ -6,7 +6,6 @@ Thin: the budget, the verdicts and their outputs live in medkit_replay.checks.
 
 from __future__ import annotations
 
-import errno
 import os
 import stat
 import sys
@@ -153,16 +152,17 @@ def _github(runs: list[CheckRun]) -> None:
 
 
 def append_whole(path: Path, data: bytes) -> None:
-    """Append ``data`` to a file in one write; if it cannot all be written (a full disk), the
-    file is cut back to its old length, so a failed append leaves nothing behind."""
+    """Append ``data`` to a file in one write; if it cannot all be written (a full disk, a size
+    limit, a signal), the file is cut back to its old length, so a failed append leaves nothing
+    behind."""
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_CLOEXEC, 0o666)
     try:
         info = os.fstat(fd)
         regular = stat.S_ISREG(info.st_mode)
         try:
-            written = os.write(fd, data)
-            if written != len(data):
-                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            rest = memoryview(data)
+            while rest:  # one write, unless the system takes only part of it
+                rest = rest[os.write(fd, rest) :]
         except BaseException:
             if regular:
                 os.ftruncate(fd, info.st_size)
