@@ -17,6 +17,12 @@ Option: ``--update-golden`` rewrites golden reports that differ (or are missing)
 
 Loaded into every pytest session of an environment where medkit-replay is installed, so it does
 nothing until one of its fixtures or helpers is used: no import of the replay, no output.
+
+The replay's modules are imported once per process, also under pytester, whose in-process
+sessions forget every module a session imported: each session gets the same module objects
+back (see ``_KEPT``). Imported a second time, numpy refuses to load ("cannot load module more
+than once per process") and our classes would exist twice; that once turned every recorded
+definition into "unusable" and the replay of the next session into an empty one.
 """
 
 from __future__ import annotations
@@ -24,6 +30,8 @@ from __future__ import annotations
 import difflib
 import itertools
 import re
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -31,7 +39,8 @@ from typing import TYPE_CHECKING
 import pytest
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Iterator, Sequence
+    from types import ModuleType
 
     from medkit_replay.model import FaultEvent, Transition
     from medkit_replay.result import Result
@@ -50,6 +59,30 @@ Window = tuple[float | None, float | None]
 _configs: list[pytest.Config] = []
 """Configs of the running pytest sessions, innermost last (pytester nests sessions)."""
 _updated_key = pytest.StashKey[list[Path]]()
+_KEPT: dict[str, ModuleType] = {}
+"""Every module this plugin's replays, budgets and goldens brought into the process, by name:
+put back into ``sys.modules`` when a session starts, so that none is ever imported twice."""
+
+
+@contextmanager
+def _keeping_modules() -> Iterator[None]:
+    """Remember the modules imported inside the block (the replay's, numpy, rosbags...), after
+    putting back those an earlier block imported (a pytester session may have dropped them)."""
+    _restore_modules()
+    before = set(sys.modules)
+    try:
+        yield
+    finally:
+        for name in set(sys.modules) - before:
+            module = sys.modules.get(name)
+            if module is not None:
+                _KEPT.setdefault(name, module)
+
+
+def _restore_modules() -> None:
+    """Give ``sys.modules`` back the modules an earlier session imported and pytester dropped."""
+    for name, module in _KEPT.items():
+        sys.modules.setdefault(name, module)
 
 
 # --- hooks ---------------------------------------------------------------------------------------
@@ -68,7 +101,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Remember the session's config (for the update flag of the module-level helpers)."""
+    """Remember the session's config (for the update flag of the module-level helpers), and
+    hand it the replay's modules if an earlier session in this process imported them."""
+    _restore_modules()
     config.stash[_updated_key] = []
     _configs.append(config)
 
@@ -120,8 +155,6 @@ class RecordingReplayer:
         Raises:
             medkit_replay.errors.MedkitReplayError: an input or config cannot be used.
         """
-        from medkit_replay.pipeline import replay  # noqa: PLC0415  # only when used
-
         paths = [inputs] if isinstance(inputs, str | Path) else list(inputs)
         files = [configs] if isinstance(configs, str | Path) else list(configs)
         key = (
@@ -129,7 +162,10 @@ class RecordingReplayer:
             tuple(str(Path(c).resolve()) for c in files),
         )
         if key not in self._cache:  # replayed with the paths as given, as the report shows them
-            self._cache[key] = replay(paths, files)
+            with _keeping_modules():
+                from medkit_replay.pipeline import replay  # noqa: PLC0415  # only when used
+
+                self._cache[key] = replay(paths, files)
         return self._cache[key]
 
 
@@ -444,10 +480,11 @@ def assert_within_budget(result: Result, budget_path: PathLike) -> None:
         medkit_replay.errors.ConfigError: the budget file is missing or invalid.
     """
     __tracebackhide__ = True
-    from medkit_replay.checks import evaluate, load_budget  # noqa: PLC0415  # only when used
+    with _keeping_modules():
+        from medkit_replay.checks import evaluate, load_budget  # noqa: PLC0415  # only when used
 
-    budget = load_budget(budget_path)
-    verdicts = evaluate(budget, result)
+        budget = load_budget(budget_path)
+        verdicts = evaluate(budget, result)
     failed = [v for v in verdicts if not v.passed]
     if not failed:
         return
@@ -488,10 +525,6 @@ def assert_matches_golden(
     written from the result instead, and the assertion passes. The failure message is the diff.
     """
     __tracebackhide__ = True
-    from medkit_replay.commands.diff import read_report  # noqa: PLC0415  # only when used
-    from medkit_replay.diffing import diff_reports, render_diff, tolerance_ns  # noqa: PLC0415
-    from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
-
     golden_path = Path(path)
     if update is None:
         update = _update_requested()
@@ -503,29 +536,38 @@ def assert_matches_golden(
             f"golden report {golden_path} does not exist\n"
             "  run pytest with --update-golden to write it from this run"
         )
-    diff = diff_reports(
-        read_report(golden_path),
-        to_report(result),
-        time_tolerance_ns=tolerance_ns(time_tolerance),
-        baseline_name=str(golden_path),
-        current_name="this run",
-    )
-    if diff.equal:
+    with _keeping_modules():
+        from medkit_replay.commands.diff import read_report  # noqa: PLC0415  # only when used
+        from medkit_replay.diffing import diff_reports, render_diff, tolerance_ns  # noqa: PLC0415
+        from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
+
+        diff = diff_reports(
+            read_report(golden_path),
+            to_report(result),
+            time_tolerance_ns=tolerance_ns(time_tolerance),
+            baseline_name=str(golden_path),
+            current_name="this run",
+        )
+        shown = None if diff.equal else render_diff(diff, DIFF_WIDTH)
+    if shown is None:
         return
     if update:
         _write_golden(result, golden_path)
         return
     raise AssertionError(
         "the run differs from its golden report\n"
-        + render_diff(diff, DIFF_WIDTH)
+        + shown
         + "\nrun pytest with --update-golden to accept this run as the new golden report"
     )
 
 
 def _write_golden(result: Result, path: Path) -> None:
-    from medkit_replay.outputs.json_report import write_json  # noqa: PLC0415
+    """Write a golden report whole (a temporary file renamed into place)."""
+    with _keeping_modules():
+        from medkit_replay.outputs.atomic import atomic_text  # noqa: PLC0415
+        from medkit_replay.outputs.json_report import write_json  # noqa: PLC0415
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", encoding="utf-8", newline="\n") as stream:
-        write_json(result, stream)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_text(path) as stream:
+            write_json(result, stream)
     _note_updated(path)

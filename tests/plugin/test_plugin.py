@@ -9,12 +9,6 @@ from pathlib import Path
 
 import pytest
 
-# Imported before pytester's in-process sessions run, so that they all share these modules:
-# pytester forgets the modules a session imported, and a module imported again in the next
-# session would hold new classes beside the old ones.
-import medkit_replay.checks
-import medkit_replay.commands.diff
-import medkit_replay.pipeline  # noqa: F401
 from medkit_replay.pytest_plugin import (
     RecordingReplayer,
     assert_confirmed,
