@@ -246,6 +246,8 @@ class Decoder:
         for index, (label, store) in enumerate(self._candidates):
             try:
                 message = store.deserialize_cdr(raw, self.msgtype)
+            except ImportError:
+                raise  # the environment, not the payload: never a silently skipped message
             except Exception as exc:  # rosbags raises SerdeError, IndexError, ... on bad bytes
                 first_error = first_error or exc
                 continue
@@ -272,6 +274,8 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
         store = get_typestore(Stores.EMPTY)
         store.register(_complete(types, base_typestore().fielddefs))
         store.get_msgdef(msgtype)  # compile now, so a bad definition fails here
+    except ImportError:
+        raise  # the environment, not the recording (numpy imported twice once emptied a replay)
     except Exception as exc:  # DefinitionError, TypesysError, KeyError from rosbags
         return str(exc)
     return ("recorded definition", store)
