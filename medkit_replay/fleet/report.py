@@ -15,6 +15,7 @@ import io
 import json
 import math
 import re
+from dataclasses import replace
 from typing import TYPE_CHECKING, TextIO
 
 import pandas as pd
@@ -52,9 +53,17 @@ MAX_CODE_ROWS = 20
 """Codes listed on the terminal."""
 MAX_ERROR_ROWS = 20
 """Failed recordings listed on the terminal."""
+_REORDERING = re.compile(r"[\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+"""What would reorder or break the text of an HTML page: shown as escapes there."""
+MAX_CELL_CHARS = 2000
+"""Characters of a text cell in index.html; longer text ends in an ellipsis."""
 _UNPRINTABLE = re.compile(
     r"[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069\ud800-\udfff]"
 )
+
+
+def _escape(match: re.Match[str]) -> str:
+    return f"\\u{ord(match.group()):04x}"
 
 
 def _literal(value: object) -> str:
@@ -103,6 +112,25 @@ def _texts(runs: Sequence[RunSummary]) -> dict[str, str]:
     }
 
 
+def _text(value: str) -> str:
+    """Text every writer can encode: a lone surrogate (a file name that is not UTF-8) becomes
+    its escape, ``\\udcff``; any other text stays as it is."""
+    return value.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _encodable(run: RunSummary) -> RunSummary:
+    """The run with every text it holds made encodable (itself when it already is)."""
+    return replace(
+        run,
+        path=_text(run.path),
+        top_codes=tuple((_text(code), n) for code, n in run.top_codes),
+        confirmed=tuple((_text(code), t) for code, t in run.confirmed),
+        heals=tuple((_text(code), ns) for code, ns in run.heals),
+        budget_failures=tuple(_text(name) for name in run.budget_failures),
+        error=None if run.error is None else _text(run.error),
+    )
+
+
 def _untabulated(run: RunSummary, error: Exception) -> RunSummary:
     from medkit_replay.fleet.run import RunSummary  # noqa: PLC0415  # no cycle at import
 
@@ -114,7 +142,7 @@ def _untabulated(run: RunSummary, error: Exception) -> RunSummary:
 def tabulated(runs: Sequence[RunSummary]) -> tuple[list[RunSummary], dict[str, str]]:
     """The report files' texts; a run they cannot hold (whatever the reason) is replaced by a
     failed row saying why, so one run never costs the report of the others."""
-    kept = list(runs)
+    kept = [_encodable(run) for run in runs]
     try:
         return kept, _texts(kept)
     except Exception:  # find the runs at fault, one at a time
@@ -223,7 +251,9 @@ def _number_cell(value: object, digits: int | None = None) -> str:
 
 
 def _text_cell(value: object, css: str = "") -> str:
-    text = "" if _is_missing(value) else str(value)
+    text = "" if _is_missing(value) else _REORDERING.sub(_escape, str(value))
+    if len(text) > MAX_CELL_CHARS:
+        text = text[: MAX_CELL_CHARS - 1] + "…"  # runs.json keeps the whole text
     attr = f' class="{html.escape(css)}"' if css else ""
     return f"<td{attr}>{html.escape(text)}</td>"
 

@@ -57,6 +57,8 @@ ATTEMPTS = 2
 """How often a run whose worker died is tried before it is reported as failed."""
 READY = "ready"
 """What a worker process sends once it has started."""
+READY_BYTE = b"R"
+"""What the child of ``run_isolated`` writes once it has started."""
 INT64 = range(-(2**63), 2**63)
 """What the fleet table's integer columns hold."""
 
@@ -473,8 +475,10 @@ _CHILD = "from medkit_replay.fleet.run import serve_one; serve_one()"
 
 
 def serve_one() -> None:
-    """The child of :func:`run_isolated`: one pickled job on standard input, its summary
-    pickled on standard output."""
+    """The child of :func:`run_isolated`: says it has started, then replays the pickled job on
+    standard input and writes its summary, pickled, on standard output."""
+    sys.stdout.buffer.write(READY_BYTE)
+    sys.stdout.buffer.flush()
     path, configs, budget, label = pickle.load(sys.stdin.buffer)  # from our own parent
     summary = run_one(path, configs, budget, label)
     sys.stdout.buffer.write(pickle.dumps(summary, protocol=pickle.HIGHEST_PROTOCOL))
@@ -488,31 +492,42 @@ def run_isolated(
     label: str | None = None,
     timeout: float | None = None,
 ) -> RunSummary:
-    """``run_one`` in a child process of its own, killed after ``timeout`` seconds: what a Dask
-    task runs when the fleet has a per-run timeout (a thread cannot be stopped, and a daemonic
-    Dask worker may not use multiprocessing). A child that dies or runs out of time is this
-    run's failure."""
+    """``run_one`` in a child process of its own, killed after ``timeout`` seconds (counted once
+    it has started): what a Dask task runs when the fleet has a per-run timeout (a thread
+    cannot be stopped, and a daemonic Dask worker may not use multiprocessing). A child that
+    dies or runs out of time is this run's failure."""
     shown = str(path) if label is None else label
     job = pickle.dumps((str(path), tuple(str(c) for c in configs), budget, label))
+    child = subprocess.Popen(  # our own interpreter and module
+        [sys.executable, "-c", _CHILD],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
     try:
-        done = subprocess.run(  # our own interpreter and module
-            [sys.executable, "-c", _CHILD],
-            input=job,
-            capture_output=True,
-            timeout=timeout,
-            check=False,
-        )
+        assert child.stdout is not None
+        output = b""
+        if child.stdout.read(len(READY_BYTE)) == READY_BYTE:
+            output, _ = child.communicate(job, timeout=timeout)
+        child.wait()
     except subprocess.TimeoutExpired:
         problem = f"timed out after {seconds_text(timeout or 0)} s"
     else:
-        if done.returncode == 0:
+        if child.returncode == 0:
             try:
-                summary = pickle.loads(done.stdout)  # from our own child
+                summary = pickle.loads(output)  # from our own child
             except Exception:  # a truncated pickle: the child did not finish
                 summary = None
             if isinstance(summary, RunSummary):
                 return summary
-        problem = f"worker died: {death_text(done.returncode)}"
+        problem = f"worker died: {death_text(child.returncode)}"
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+        for stream in (child.stdin, child.stdout):
+            if stream is not None:
+                stream.close()
     return RunSummary(path=shown, kind=run_kind(Path(path)), error=f"{shown}: {problem}")
 
 

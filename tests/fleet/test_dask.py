@@ -78,6 +78,21 @@ def test_dask_worker_processes_and_budget(tmp_path: Path) -> None:
     assert sorted(seen) == [0, 1, 2]
 
 
+def test_dask_timeout_kills_the_slow_run_only(tmp_path: Path) -> None:
+    """With a timeout each task replays in a child process of its own, killed when time is up."""
+    quick = write_script(tmp_path / "a.jsonl", [line for _, line in episode("WIFI", 1.0, 2.0)])
+    slow = write_script(
+        tmp_path / "slow.jsonl",
+        [line for n in range(40_000) for _, line in episode(f"C{n % 997}", 1.0 + n / 1000, None)],
+    )
+    threads = LocalCluster(processes=False, threads_per_worker=2, **CLUSTER)  # type: ignore[no-untyped-call]
+    with threads as cluster:
+        runs = run_on_dask(cluster.scheduler_address, [quick, slow], [BRINGUP], timeout=0.5)
+    assert runs[0] == run_all([quick], [BRINGUP], jobs=1)[0]
+    assert runs[1].error == f"{slow}: timed out after 0.5 s"
+    assert runs[1].path == str(slow) and runs[1].kind == "script"
+
+
 def test_missing_extra_is_one_line_naming_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
