@@ -292,3 +292,27 @@ def test_a_report_that_cannot_be_written_leaves_no_partial_file(tmp_path: Path) 
     for name in FILES:
         text = (out_dir / name).read_text(encoding="utf-8")
         assert text == old[name].decode("utf-8") or text.endswith("\n"), name
+
+
+def test_names_that_are_not_utf8_or_reorder_text_are_reported(tmp_path: Path) -> None:
+    """A recording named with bytes that are not UTF-8 and a right-to-left override: the fleet
+    ends normally, the name is an escape in every file, and the page shows no raw bidi control.
+    """
+    fleet = tmp_path / "fleet"
+    quick = small_runs(fleet)
+    odd = os.fsencode(fleet) + b"/bad\xff\xfe\xe2\x80\xae.jsonl"
+    with open(odd, "wb") as stream:  # noqa: PTH123  # a bytes path: pathlib would decode it
+        stream.write(quick[0].read_bytes())
+    out_dir = tmp_path / "report"
+    outcome = run_limited(["fleet", fleet, "--config", BRINGUP, "--out", out_dir], timeout=120)
+    assert_clean(outcome)
+    assert outcome.status == 0, outcome.stderr[-2000:]
+    table = rows(out_dir)
+    (name,) = [n for n in table if n.startswith("bad")]
+    assert name == "bad\\udcff\\udcfe\u202e.jsonl"
+    assert table[name]["error"] == "" and table[name]["confirmed"] == "0"
+    page = (out_dir / "index.html").read_text(encoding="utf-8")
+    assert "\u202e" not in page and "bad\\udcff\\udcfe\\u202e.jsonl" in page
+    assert "\u202e" not in outcome.stdout
+    runs = json.loads((out_dir / "runs.json").read_text(encoding="utf-8"))
+    assert any(run["path"].endswith("bad\\udcff\\udcfe\u202e.jsonl") for run in runs)
