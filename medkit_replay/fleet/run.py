@@ -59,8 +59,6 @@ READY = "ready"
 """What a worker process sends once it has started."""
 READY_BYTE = b"R"
 """What the child of ``run_isolated`` writes once it has started."""
-INT64 = range(-(2**63), 2**63)
-"""What the fleet table's integer columns hold."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -214,19 +212,33 @@ def _describe(error: BaseException) -> str:
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
+def _shown(value: object) -> str:
+    if isinstance(value, int):
+        return str(value) if value.bit_length() <= 128 else f"a {value.bit_length()}-bit number"
+    return repr(value)[:40]
+
+
+def _int64(value: object) -> bool:
+    # Never ``value in range(...)``: for anything but an int that walks the whole range.
+    return type(value) is int and -(2**63) <= value < 2**63
+
+
 def summary_problem(summary: RunSummary) -> str | None:
-    """Why the fleet table cannot hold a summary (a time at or past 2^63 ns, say), or None; such
-    a run is reported as failed rather than costing the whole report."""
+    """Why the fleet table cannot hold a summary (a time at or past 2^63 ns, a time that is not
+    an integer), or None; such a run is reported as failed rather than costing the report."""
     times = [summary.start_ns, summary.end_ns, *(t for _, t in summary.confirmed)]
     for t_ns in times:
-        if t_ns is not None and t_ns not in INT64:
-            return f"bag time {t_ns} ns is out of range (from -2^63 up to 2^63 ns)"
+        if t_ns is not None and not _int64(t_ns):
+            return f"bag time {_shown(t_ns)} is out of range (an integer ns below 2^63 expected)"
     for _, ns in summary.heals:
-        if ns not in INT64:
-            return f"a heal after {ns} ns is out of range"
-    span = summary.span_ns
-    if span is not None and span not in INT64:
+        if not _int64(ns):
+            return f"a heal after {_shown(ns)} ns is out of range"
+    span = summary.span_ns if all(_int64(t) for t in times if t is not None) else None
+    if span is not None and not _int64(span):
         return f"a recording spanning {span} ns is out of range"
+    for name, count in (("messages", summary.messages), ("warnings", summary.warnings)):
+        if count is not None and not _int64(count):
+            return f"{name} count {_shown(count)} is out of range"
     return None
 
 
