@@ -123,6 +123,7 @@ def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -
         bar = progress_bar(sys.stderr)
         with bar if bar is not None else nullcontext():
             result = replay(group, configs, progress=bar)
+        return check_run(budget, result, labels)
     except ConfigError:
         raise
     except MedkitReplayError as err:
@@ -132,8 +133,6 @@ def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -
     except Exception as err:  # whatever the recording makes the replay raise: it failed
         text = " ".join(str(err).split())
         error = f"{' + '.join(labels)}: {type(err).__name__}" + (f": {text}" if text else "")
-    else:
-        return check_run(budget, result, labels)
     return unreadable_run(budget, labels, " ".join(error.split()))
 
 
