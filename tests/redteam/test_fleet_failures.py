@@ -173,7 +173,7 @@ def test_a_fifo_inside_a_bag_is_bounded_by_the_timeout(tmp_path: Path) -> None:
     os.mkfifo(data)
     out_dir = tmp_path / "report"
     outcome = run_limited(
-        ["fleet", fleet, "--config", BRINGUP, "--timeout", "20", "--out", out_dir], timeout=240
+        ["fleet", fleet, "--config", BRINGUP, "--timeout", "10", "--out", out_dir], timeout=240
     )
     assert_clean(outcome)
     assert outcome.status == 0
