@@ -57,6 +57,8 @@ ATTEMPTS = 2
 """How often a run whose worker died is tried before it is reported as failed."""
 READY = "ready"
 """What a worker process sends once it has started."""
+MAX_ERROR_CHARS = 4000
+"""A run's error is cut here (an ellipsis ends it): a message quoting a 10 MB field stays short."""
 READY_BYTE = b"R"
 """What the child of ``run_isolated`` writes once it has started."""
 
@@ -203,12 +205,17 @@ def run_one(
     error = " ".join(error.split())
     if label is not None:
         error = error.replace(str(path), label)
+    if len(error) > MAX_ERROR_CHARS:
+        error = error[: MAX_ERROR_CHARS - 1] + "…"
     return RunSummary(path=shown, kind=kind, error=error)
 
 
 def _describe(error: BaseException) -> str:
     """An exception on one line: its type, and its text when it has one."""
-    text = " ".join(str(error).split())
+    try:
+        text = " ".join(str(error).split())
+    except Exception:  # a text that cannot be made (a number too long to print)
+        text = ""
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
