@@ -252,7 +252,7 @@ def test_the_report_may_not_land_in_an_input_or_over_a_config(tmp_path: Path) ->
 
 
 @pytest.mark.xfail(
-    reason="waits for medkit_replay/outputs/csv_safety.py (helper H6), to be used in fleet/report.py",
+    reason="waits for medkit_replay/outputs/csv_safety.py (H6), to be used in fleet/report.py",
     strict=True,
 )
 def test_spreadsheet_formulas_are_neutralised_in_the_csv(tmp_path: Path) -> None:
