@@ -1,6 +1,7 @@
 """The report's tables as pandas DataFrames, and CSV files of them.
 
 Built from one Result with the JSON report's field names; list fields stay Python lists.
+CSV cells that a spreadsheet would run as formulas are neutralised (outputs/csv_safety.py).
 """
 
 from __future__ import annotations
@@ -8,7 +9,10 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import pandas as pd
+from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
+from medkit_replay.outputs.atomic import atomic_text
+from medkit_replay.outputs.csv_safety import neutralised
 from medkit_replay.outputs.json_report import (
     clear_dict,
     cluster_dict,
@@ -136,18 +140,47 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
     }
 
 
+def _encodable_text(value: object) -> object:
+    # A lone surrogate (from a script's "\udcff") cannot be written as UTF-8: written as its escape.
+    if isinstance(value, str) and not value.isascii():
+        return value.encode("utf-8", "backslashreplace").decode("utf-8")
+    return value
+
+
+def encodable(frame: pd.DataFrame) -> pd.DataFrame:
+    """The table with every text cell UTF-8 can encode (lone surrogates as ``\\udcff``); lists
+    of text likewise; numeric and boolean columns untouched. Valid text is unchanged."""
+    safe = frame.copy()
+    for column in safe.columns:
+        series = safe[column]
+        if is_numeric_dtype(series.dtype) or is_bool_dtype(series.dtype):
+            continue
+        safe[column] = series.map(
+            lambda v: (
+                [_encodable_text(item) for item in v] if isinstance(v, list) else _encodable_text(v)
+            )
+        )
+    return safe
+
+
 def write_csv(result: Result, directory: Path) -> list[Path]:
-    """Write ``<table>.csv`` for every table into ``directory``; lists joined with ``;``."""
+    """Write ``<table>.csv`` for every table into ``directory``; lists joined with ``;``.
+
+    Each file goes through a temporary file renamed into place, so a file of the folder is
+    whole (the old one or the new one), never partial. Text cells a spreadsheet would run as a
+    formula get a leading single quote (see csv_safety.neutralise); numbers stay numbers.
+    """
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for name, frame in result_tables(result).items():
-        flat = frame.copy()
+        flat = encodable(frame)
         for column in flat.columns:
             if flat[column].map(lambda v: isinstance(v, list)).any():
                 flat[column] = flat[column].map(
                     lambda v: ";".join(map(str, v)) if isinstance(v, list) else v
                 )
         path = directory / f"{name}.csv"
-        flat.to_csv(path, index=False, lineterminator="\n")
+        with atomic_text(path) as stream:
+            neutralised(flat).to_csv(stream, index=False, lineterminator="\n")
         written.append(path)
     return written

@@ -14,8 +14,6 @@ import sqlite3
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import pytest
-
 from medkit_replay.fleet.report import FILES
 from tests.fleet.fleet_support import BRINGUP, episode, write_script
 from tests.inputs.builders import diag, storage_file, write_bag
@@ -251,10 +249,6 @@ def test_the_report_may_not_land_in_an_input_or_over_a_config(tmp_path: Path) ->
         assert tree_listing(tmp_path) == before
 
 
-@pytest.mark.xfail(
-    reason="waits for medkit_replay/outputs/csv_safety.py (H6), to be used in fleet/report.py",
-    strict=True,
-)
 def test_spreadsheet_formulas_are_neutralised_in_the_csv(tmp_path: Path) -> None:
     """A folder and a fault code that a spreadsheet would run as formulas stay text."""
     fleet = tmp_path / "=HYPERLINK(1)"
