@@ -21,6 +21,8 @@ from medkit_replay.checks.github import step_summary, workflow_commands
 from medkit_replay.checks.junit import write_junit
 from medkit_replay.checks.terminal import print_conclusion, print_run
 from medkit_replay.commands import config_option
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
 from medkit_replay.fleet.run import check_configs
@@ -91,14 +93,16 @@ def check(
     outputs = [("--junit", junit_out)] if junit_out is not None else []
     if summary_path:
         outputs.append((f"${SUMMARY_ENV}", Path(summary_path)))
-    refuse_overlap([*inputs, *configs, budget_path], outputs)
+    refuse_overlap([*inputs, *config_files(configs), budget_path], outputs)
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
     for group in groups:
         run = _check_group(budget, group, configs)
         runs.append(run)
-        print_run(run, sys.stdout)
-    print_conclusion(runs, sys.stdout)
+        with standard_output("the check's results"):
+            print_run(run, sys.stdout)
+    with standard_output("the check's results"):
+        print_conclusion(runs, sys.stdout)
     if junit_out is not None:
         try:
             write_junit(runs, junit_out)
@@ -137,8 +141,9 @@ def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -
 
 
 def _github(runs: list[CheckRun]) -> None:
-    for command in workflow_commands(runs):
-        sys.stdout.write(command + "\n")
+    with standard_output("the GitHub annotations"):
+        for command in workflow_commands(runs):
+            sys.stdout.write(command + "\n")
     summary_path = os.environ.get(SUMMARY_ENV)
     if not summary_path:
         return

@@ -15,6 +15,8 @@ from pathlib import Path
 import click
 
 from medkit_replay.commands import config_option
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.fleet.discover import discover
 from medkit_replay.fleet.run import check_configs, dask_client_type, run_all, run_on_dask
@@ -112,7 +114,7 @@ def fleet(
         write_texts,
     )
 
-    protected = [*input_dirs, *configs, *([budget] if budget is not None else [])]
+    protected = [*input_dirs, *config_files(configs), *([budget] if budget is not None else [])]
     refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])
     recordings = discover(input_dirs)
     if not recordings:
@@ -149,7 +151,8 @@ def fleet(
             f"cannot write the fleet report: {err.strerror}", path=str(out_dir)
         ) from None
     if not quiet:
-        print_summary(runs, sys.stdout, out_dir)
+        with standard_output("the fleet summary"):
+            print_summary(runs, sys.stdout, out_dir)
     failed = any(not run.ok or run.budget == "fail" for run in runs)
     if parsed_budget is not None and failed:
         click.get_current_context().exit(1)

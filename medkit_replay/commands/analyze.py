@@ -1,0 +1,155 @@
+"""``medkit-replay analyze``: replay recordings and write the report in every format asked for.
+
+Outputs are refused before the replay when they would land on an input or a config file.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from contextlib import nullcontext
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from medkit_replay.commands import config_option
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.config.referenced import config_files
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.outputs.atomic import atomic_text, refuse_overlap
+from medkit_replay.outputs.json_report import write_json
+from medkit_replay.outputs.progress import progress_bar
+from medkit_replay.outputs.terminal import print_summary
+from medkit_replay.pipeline import replay
+
+if TYPE_CHECKING:
+    from medkit_replay.result import Result
+
+# Writers of whole files, imported only when asked for (pandas, pyarrow, mcap are heavy).
+FILE_OUTPUTS = (
+    ("--csv", "CSV", "medkit_replay.outputs.tables", "write_csv"),
+    ("--parquet", "Parquet", "medkit_replay.outputs.parquet", "write_parquet"),
+    ("--mcap", "MCAP", "medkit_replay.outputs.mcap_events", "write_mcap"),
+    ("--html", "HTML", "medkit_replay.outputs.html", "write_html"),
+)
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@config_option()
+@click.option(
+    "--json",
+    "json_out",
+    type=str,
+    default=None,
+    help="Write the JSON report here ('-' for standard output).",
+)
+@click.option(
+    "--csv",
+    "csv_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Write every report table as CSV into this directory.",
+)
+@click.option(
+    "--parquet",
+    "parquet_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
+)
+@click.option(
+    "--mcap",
+    "mcap_out",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write the replayed FaultEvents and status changes as an MCAP recording.",
+)
+@click.option(
+    "--html",
+    "html_out",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
+)
+@click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
+def analyze(
+    inputs: tuple[Path, ...],
+    configs: tuple[Path, ...],
+    json_out: str | None,
+    csv_dir: Path | None,
+    parquet_dir: Path | None,
+    mcap_out: Path | None,
+    html_out: Path | None,
+    quiet: bool,
+) -> None:
+    """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
+
+    \b
+    Examples:
+      medkit-replay analyze mission/ --config robot_params.yaml --json report.json
+      medkit-replay analyze run.jsonl --json - --quiet
+      medkit-replay analyze bag/ --html report.html
+      medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
+    """
+    if parquet_dir is not None:
+        from medkit_replay.outputs.parquet import require_pyarrow  # noqa: PLC0415  # pandas
+
+        require_pyarrow()  # say so before a long replay, not after it
+    targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
+    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, targets))
+    bar = progress_bar(sys.stderr, quiet=quiet)
+    with bar if bar is not None else nullcontext():
+        result = replay(list(inputs), list(configs), progress=bar)
+    if json_out == "-":
+        with standard_output("the report"):
+            write_json(result, sys.stdout)
+    elif json_out is not None:
+        try:
+            with atomic_text(Path(json_out)) as stream:
+                write_json(result, stream)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write report: {err.strerror or err}", path=json_out
+            ) from None
+    for option, label, module, function in FILE_OUTPUTS:
+        target = targets[option]
+        if target is not None:
+            _write_output(result, target, label, module, function)
+    if not quiet:
+        if json_out == "-":
+            print_summary(result, sys.stderr)
+        else:
+            with standard_output("the summary"):
+                print_summary(result, sys.stdout)
+
+
+def _output_paths(json_out: str | None, targets: dict[str, Path | None]) -> list[tuple[str, Path]]:
+    """Every path an output would write, with the option that names it."""
+    paths: list[tuple[str, Path]] = []
+    if json_out is not None and json_out != "-":
+        paths.append(("--json", Path(json_out)))
+    for option, suffix in (("--csv", ".csv"), ("--parquet", ".parquet")):
+        directory = targets[option]
+        if directory is not None:
+            from medkit_replay.outputs.tables import TABLE_COLUMNS  # noqa: PLC0415  # pandas
+
+            paths.append((option, directory))
+            paths.extend((option, directory / f"{name}{suffix}") for name in TABLE_COLUMNS)
+    for option in ("--mcap", "--html"):
+        target = targets[option]
+        if target is not None:
+            paths.append((option, target))
+    return paths
+
+
+def _write_output(result: Result, target: Path, label: str, module: str, function: str) -> None:
+    """Run one file output."""
+    writer = getattr(importlib.import_module(module), function)
+    try:
+        writer(result, target)
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot write {label}: {err.strerror or err}", path=str(target)
+        ) from None
