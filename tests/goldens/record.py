@@ -1,6 +1,7 @@
 """Record the goldens: the SHA-256 of every golden case's JSON report, as this checkout writes it.
 
-Run from the repository root: ``python -m tests.goldens.record`` (only when a report is meant to change).
+Run from the repository root, only when a report is meant to change:
+``python -m tests.goldens.record``.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from tests.goldens.cases import GOLDENS, ROOT, argv, cases
 
 
 def report_digest(inputs: list[str], configs: list[str]) -> str:
-    """Run one case in-process from the repository root; the report's SHA-256, or the exit status."""
+    """Run one case in-process from the repository root: its report's SHA-256, or its status."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp, "report.json")
         cwd = Path.cwd()

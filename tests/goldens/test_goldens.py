@@ -16,6 +16,6 @@ def test_every_case_has_a_golden() -> None:
     assert sorted(RECORDED) == sorted(case for case, _, _ in cases())
 
 
-@pytest.mark.parametrize(("case", "inputs", "configs"), cases(), ids=lambda v: str(v))
+@pytest.mark.parametrize(("case", "inputs", "configs"), cases(), ids=str)
 def test_report_is_unchanged(case: str, inputs: list[str], configs: list[str]) -> None:
     assert report_digest(inputs, configs) == RECORDED[case]
