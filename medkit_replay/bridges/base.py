@@ -31,8 +31,8 @@ class ReportSink(Protocol):
         description: str,
         source_id: str,
         /,
-    ) -> None:
-        """Handle the request."""
+    ) -> object:
+        """Handle the request (what it returns is not used)."""
 
 
 class Bridge(Protocol):

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, TypeAlias, TypeVar
 
 from medkit_replay.engine.correlation.engine import CorrelationEngine, severity_name
-from medkit_replay.engine.debounce import DebounceConfig, compute_status, sanitize
+from medkit_replay.engine.debounce import DebounceConfig, sanitize
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
 from medkit_replay.engine.thresholds import EntityOverride, EntityThresholdResolver
 from medkit_replay.engine.validation import fault_code_error, report_error
@@ -23,13 +23,11 @@ from medkit_replay.model import (
     ClearRequest,
     EngineOutput,
     EventKind,
-    FaultEvent,
+    EventType,
     FaultSnapshot,
-    ReportRecord,
     ReportRequest,
     RetroactiveMute,
     Status,
-    Transition,
 )
 
 if TYPE_CHECKING:
@@ -39,57 +37,12 @@ if TYPE_CHECKING:
     from medkit_replay.model import Origin, RecordLog, RecordRows
 
 _T = TypeVar("_T")
-_EVENT_NAMES = {0: "FAILED", 1: "PASSED"}
+_EVENT_NAMES = {event.value: event.name for event in EventType}
 _MAX_CACHED_SOURCES = 65536
 
 Row = tuple[object, ...]
 if TYPE_CHECKING:
-    FieldsReporter: TypeAlias = Callable[[int, Origin, str | None, str, int, int, str, str], None]
-
-# report_fields builds these rows positionally: a record class that changes must change it too.
-if REPORT_ROWS.names != (
-    "t_ns",
-    "origin",
-    "topic",
-    "fault_code",
-    "event_type",
-    "severity",
-    "description",
-    "source_id",
-    "accepted",
-    "reject_reason",
-    "status",
-    "debounce_counter",
-    "confirmation_threshold",
-    "healing_threshold",
-    "withheld_event",
-) or EVENT_ROWS.names != (
-    "t_ns",
-    "event_type",
-    "fault_code",
-    "severity",
-    "description",
-    "first_occurred_ns",
-    "last_occurred_ns",
-    "last_passed_ns",
-    "occurrence_count",
-    "status",
-    "reporting_sources",
-    "muted",
-    "root_cause_code",
-    "cluster_ids",
-    "auto_cleared_codes",
-):
-    raise ImportError("ReportRecord or FaultEvent changed: update FaultManager.report_fields")
-if TRANSITION_ROWS.names != (
-    "t_ns",
-    "fault_code",
-    "from_status",
-    "to_status",
-    "cause",
-    "source_id",
-):
-    raise ImportError("Transition changed: update FaultManager.report_fields")
+    FieldsReporter: TypeAlias = Callable[[int, Origin, str | None, str, int, int, str, str], bool]
 
 
 def _row_sink(log: RecordLog[_T], rows: RecordRows[_T]) -> Callable[[Row], None]:
@@ -139,69 +92,30 @@ class FaultManager:
         self.event_row = _row_sink(self.output.events, EVENT_ROWS)
         self.transition_row = _row_sink(self.output.transitions, TRANSITION_ROWS)
         self.report_fields: FieldsReporter = self._fields_reporter()
-        """:meth:`report` for a request given field by field, its records appended as rows.
+        """Handle one ReportFault request given field by field; returns ``accepted``.
 
-        The replay's hot path: no request object, no record objects (a spool that takes rows
-        stores them as they are). Same state changes and records as :meth:`report`, which
-        handles the rare requests validation rejects.
+        The one implementation of the node's report handling: validation, per-entity band,
+        storage, correlation, FaultEvents. Records leave as rows (a spool stores them as they
+        are; a list gets the rebuilt records), so the replay builds no objects per request.
         """
 
     # -- ReportFault -----------------------------------------------------------------------
 
     def report(self, request: ReportRequest) -> bool:
-        """Handle one ReportFault request; returns the response's ``accepted``."""
-        reason = report_error(
-            request.fault_code, request.event_type, request.severity, request.source_id
-        )
-        if reason is not None:
-            self._report_record(request, reason, None, None)
-            return False
-        config = sanitize(self.resolver.resolve(request.source_id))
-        outcome = self.storage.report(
+        """Handle one ReportFault request; returns the response's ``accepted``.
+
+        An adapter over :attr:`report_fields`, the one implementation.
+        """
+        return self.report_fields(
+            request.t_ns,
+            request.origin,
+            request.topic,
             request.fault_code,
             request.event_type,
             request.severity,
             request.description,
             request.source_id,
-            request.t_ns,
-            config,
         )
-        fault = self.storage.faults.get(request.fault_code)
-        if fault is None:
-            self._report_record(request, None, None, config)
-            return True  # PASSED for an unknown fault: accepted, nothing stored
-        after = outcome.after
-        if outcome.before != after and after is not None:
-            self._transition(
-                request.t_ns, request.fault_code, outcome.before, after, "report", request.source_id
-            )
-        muted = False
-        if self.correlation is not None and request.event_type == 0:
-            result = self.correlation.process_fault(
-                request.fault_code, severity_name(request.severity), request.t_ns
-            )
-            muted = result.should_mute
-            if result.retroactive_mute_codes:
-                self.output.retroactive_mutes.append(
-                    RetroactiveMute(
-                        t_ns=request.t_ns,
-                        cluster_id=result.cluster_id,
-                        fault_codes=result.retroactive_mute_codes,
-                    )
-                )
-        kind: EventKind | None = None
-        if after == "CONFIRMED":
-            kind = (
-                "fault_updated"
-                if not outcome.is_new and outcome.before == "CONFIRMED"
-                else "fault_confirmed"
-            )
-        self._report_record(request, None, fault, config, withheld=kind if muted else None)
-        if kind is not None and not muted:
-            self._event(request.t_ns, kind, fault)
-        if not outcome.is_new and outcome.before != "HEALED" and after == "HEALED":
-            self._event(request.t_ns, "fault_cleared", fault)
-        return True
 
     def set_row_sinks(
         self,
@@ -209,7 +123,7 @@ class FaultManager:
         event: Callable[[Row], None],
         transition: Callable[[Row], None],
     ) -> None:
-        """Where :attr:`report_fields` puts its rows (e.g. a spool's ``row_sink``)."""
+        """Where the manager puts its report, event and transition rows (a spool's ``row_sink``)."""
         self.report_row, self.event_row, self.transition_row = report, event, transition
         self.report_fields = self._fields_reporter()
 
@@ -223,7 +137,7 @@ class FaultManager:
             self.correlation,
         )
         report_row, event_row, transition_row = self.report_row, self.event_row, self.transition_row
-        counts, event_rows, count_event = output.event_counts, self._event_rows, self._count_event
+        event_rows, count_event = self._event_row, self._count_event
 
         def report_fields(
             t_ns: int,
@@ -234,29 +148,23 @@ class FaultManager:
             severity: int,
             description: str,
             source_id: str,
-        ) -> None:
-            if fault_code in valid_codes:
-                rejected = not source_id or (
-                    event_type != 1 and (event_type != 0 or severity > 3)
-                )  # report_error's other checks
-            else:
-                rejected = report_error(fault_code, event_type, severity, source_id) is not None
-                if not rejected and len(valid_codes) < _MAX_CACHED_SOURCES:
-                    valid_codes.add(fault_code)
-            if rejected:
-                self.report(
-                    ReportRequest(
-                        t_ns=t_ns,
-                        fault_code=fault_code,
-                        event_type=event_type,
-                        severity=severity,
-                        description=description,
-                        source_id=source_id,
-                        origin=origin,
-                        topic=topic,
-                    )
+        ) -> bool:
+            if fault_code in valid_codes:  # only the checks that do not depend on the code
+                valid = source_id and (event_type == 1 or (event_type == 0 and severity <= 3))
+                reason = (
+                    None if valid else report_error(fault_code, event_type, severity, source_id)
                 )
-                return
+            else:
+                reason = report_error(fault_code, event_type, severity, source_id)
+                if reason is None and len(valid_codes) < _MAX_CACHED_SOURCES:
+                    valid_codes.add(fault_code)
+            if reason is not None:
+                name = _EVENT_NAMES.get(event_type, str(event_type))
+                report_row(
+                    (t_ns, origin, topic, fault_code, name, severity, description, source_id,
+                     False, reason, None, None, None, None, None)
+                )  # fmt: skip
+                return False
             config = configs.get(source_id)
             if config is None:
                 config = sanitize(resolver.resolve(source_id))
@@ -264,64 +172,21 @@ class FaultManager:
                     configs[source_id] = config
             output.reports_accepted += 1
             conf, heal = config.confirmation_threshold, config.healing_threshold
-            fault = faults.get(fault_code)
-            if event_type == 1:
-                if fault is None or fault.status == "CLEARED":
-                    # Nothing changes (storage.report leaves both alone); only the record.
-                    report_row(
-                        (t_ns, origin, topic, fault_code, "PASSED", severity, description,
-                         source_id, True, None, None if fault is None else "CLEARED",
-                         None if fault is None else fault.counter, conf, heal, None)
-                    )  # fmt: skip
-                    return
-                before: Status | None = fault.status
-                counter = fault.counter
-                counter = conf if counter < conf else heal if counter > heal else counter
-                counter += 1
-                counter = conf if counter < conf else heal if counter > heal else counter
-                fault.last_passed_ns = t_ns
-                fault.counter = counter
-                after = compute_status(counter, before, config)
-                assert after is not None  # an existing fault always has a status to keep
-                fault.status = after
-                if after == "PREFAILED" and before != "PREFAILED":
-                    storage.watch(fault)
-                report_row(
-                    (t_ns, origin, topic, fault_code, "PASSED", severity, description,
-                     source_id, True, None, after, counter, conf, heal, None)
-                )  # fmt: skip
-                if after == before:
-                    if after == "CONFIRMED":  # the common case: a PASSED on a confirmed fault
-                        counts["fault_updated"] = counts.get("fault_updated", 0) + 1
-                        if correlation is None:
-                            event_row(
-                                (t_ns, "fault_updated", fault_code, fault.severity,
-                                 fault.description, fault.first_occurred_ns,
-                                 fault.last_occurred_ns, t_ns, fault.occurrence_count, after,
-                                 fault.sorted_sources(), False, None, (), ())
-                            )  # fmt: skip
-                        else:
-                            event_row(event_rows(t_ns, "fault_updated", fault))
-                    return
-                transition_row((t_ns, fault_code, before, after, "report", source_id))
-                if after == "CONFIRMED":
-                    kind: EventKind = (
-                        "fault_updated" if before == "CONFIRMED" else "fault_confirmed"
-                    )
-                    count_event(kind)
-                    event_row(event_rows(t_ns, kind, fault))
-                if before != "HEALED" and after == "HEALED":
-                    count_event("fault_cleared")
-                    event_row(event_rows(t_ns, "fault_cleared", fault))
-                return
-            outcome = storage.report(
+            name = "FAILED" if event_type == 0 else "PASSED"
+            before, after, is_new = storage.report(
                 fault_code, event_type, severity, description, source_id, t_ns, config
             )
-            fault = faults[fault_code]
-            before, after, is_new = outcome.before, outcome.after, outcome.is_new
-            assert after is not None  # a FAILED always leaves a status
+            fault = faults.get(fault_code)
+            if fault is None:  # a PASSED for an unknown fault: accepted, nothing stored
+                report_row(
+                    (t_ns, origin, topic, fault_code, name, severity, description, source_id,
+                     True, None, None, None, conf, heal, None)
+                )  # fmt: skip
+                return True
+            if before != after:
+                transition_row((t_ns, fault_code, before, after, "report", source_id))
             muted = False
-            if correlation is not None:
+            if correlation is not None and event_type == 0:
                 result = correlation.process_fault(fault_code, severity_name(severity), t_ns)
                 muted = result.should_mute
                 if result.retroactive_mute_codes:
@@ -332,26 +197,24 @@ class FaultManager:
                             fault_codes=result.retroactive_mute_codes,
                         )
                     )
-            if before != after:
-                transition_row((t_ns, fault_code, before, after, "report", source_id))
-            kind_or_none: EventKind | None = None
+            kind: EventKind | None = None
             withheld: EventKind | None = None
             if after == "CONFIRMED":
-                kind_or_none = (
-                    "fault_updated" if not is_new and before == "CONFIRMED" else "fault_confirmed"
-                )
+                again = not is_new and before == "CONFIRMED"
+                kind = "fault_updated" if again else "fault_confirmed"
                 if muted:
-                    withheld, kind_or_none = kind_or_none, None
+                    withheld, kind = kind, None
             report_row(
-                (t_ns, origin, topic, fault_code, "FAILED", severity, description, source_id,
+                (t_ns, origin, topic, fault_code, name, severity, description, source_id,
                  True, None, fault.status, fault.counter, conf, heal, withheld)
             )  # fmt: skip
-            if kind_or_none is not None:
-                count_event(kind_or_none)
-                event_row(event_rows(t_ns, kind_or_none, fault))
+            if kind is not None:
+                count_event(kind)
+                event_row(event_rows(t_ns, kind, fault))
             if not is_new and before != "HEALED" and after == "HEALED":
                 count_event("fault_cleared")
                 event_row(event_rows(t_ns, "fault_cleared", fault))
+            return True
 
         return report_fields
 
@@ -359,8 +222,10 @@ class FaultManager:
         counts = self.output.event_counts
         counts[kind] = counts.get(kind, 0) + 1
 
-    def _event_rows(self, t_ns: int, kind: EventKind, fault: FaultRecord) -> Row:
-        """:meth:`_event`'s record as a row (a report's events never auto-clear others)."""
+    def _event_row(
+        self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
+    ) -> Row:
+        """A FaultEvent as a row: the fault's state now, with its correlation view."""
         code = fault.fault_code
         if self.correlation is not None:
             entry = self.correlation.muted_entry(code)
@@ -371,7 +236,7 @@ class FaultManager:
         return (
             t_ns, kind, code, fault.severity, fault.description, fault.first_occurred_ns,
             fault.last_occurred_ns, fault.last_passed_ns, fault.occurrence_count, fault.status,
-            fault.sorted_sources(), muted, root, clusters, (),
+            fault.sorted_sources(), muted, root, clusters, auto,
         )  # fmt: skip
 
     # -- ClearFault ------------------------------------------------------------------------
@@ -465,57 +330,13 @@ class FaultManager:
         cause: Cause,
         source_id: str | None,
     ) -> None:
-        self.output.transitions.append(
-            Transition(
-                t_ns=t_ns,
-                fault_code=code,
-                from_status=before,
-                to_status=after,
-                cause=cause,
-                source_id=source_id,
-            )
-        )
+        self.transition_row((t_ns, code, before, after, cause, source_id))
 
     def _event(
         self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
     ) -> None:
-        self.output.event_counts[kind] = self.output.event_counts.get(kind, 0) + 1
-        self.output.events.append(
-            FaultEvent(
-                t_ns=t_ns, event_type=kind, fault=self.snapshot(fault), auto_cleared_codes=auto
-            )
-        )
-
-    def _report_record(
-        self,
-        request: ReportRequest,
-        reason: str | None,
-        fault: FaultRecord | None,
-        config: DebounceConfig | None,
-        *,
-        withheld: EventKind | None = None,
-    ) -> None:
-        if reason is None:
-            self.output.reports_accepted += 1
-        self.output.reports.append(
-            ReportRecord(
-                t_ns=request.t_ns,
-                origin=request.origin,
-                topic=request.topic,
-                fault_code=request.fault_code,
-                event_type=_EVENT_NAMES.get(request.event_type, str(request.event_type)),
-                severity=request.severity,
-                description=request.description,
-                source_id=request.source_id,
-                accepted=reason is None,
-                reject_reason=reason,
-                status=fault.status if fault is not None else None,
-                debounce_counter=fault.counter if fault is not None else None,
-                confirmation_threshold=config.confirmation_threshold if config else None,
-                healing_threshold=config.healing_threshold if config else None,
-                withheld_event=withheld,
-            )
-        )
+        self._count_event(kind)
+        self.event_row(self._event_row(t_ns, kind, fault, auto))
 
     def _clear_record(
         self, request: ClearRequest, *, success: bool, message: str, auto: tuple[str, ...]

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from medkit_replay.engine.debounce import DebounceConfig, clamp, compute_status
 from medkit_replay.model import NearMiss, Status
@@ -47,8 +48,7 @@ class FaultRecord:
         return self._sorted_sources
 
 
-@dataclass(frozen=True, slots=True)
-class ReportOutcome:
+class ReportOutcome(NamedTuple):
     """What one applied report did: status before/after and whether it was a new occurrence."""
 
     before: Status | None

@@ -1,4 +1,4 @@
-"""FaultManager.report_fields against FaultManager.report, and the bridges' feed against on_message.
+"""FaultManager.report_fields against the plain oracle, and the bridges' feed against on_message.
 
 Random request sequences (valid and invalid, known and new faults, clears in between) under
 several configurations (healing, thresholds, entity overrides, correlation with muting and
@@ -34,6 +34,7 @@ from medkit_replay.model import (
 )
 from medkit_replay.spool import Spool
 from tests.inputs.builders import TS
+from tests.oracle.manager import oracle_report
 
 if TYPE_CHECKING:
     from medkit_replay.model import Origin
@@ -153,7 +154,8 @@ def test_report_fields_does_what_report_does(config: str, rows: str, sequence: l
             )
             assert reference.clear(request) == fast.clear(request)
             continue
-        reference.report(
+        oracle_report(
+            reference,
             ReportRequest(
                 t_ns=t_ns,
                 fault_code=step.code,
