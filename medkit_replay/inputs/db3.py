@@ -7,30 +7,172 @@ from __future__ import annotations
 
 import shutil
 import sqlite3
+import struct
 from contextlib import closing
+from pathlib import Path
 from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
+from medkit_replay.files import FileRefusedError, open_regular
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.selection import normalize_typename
-from medkit_replay.inputs.storage import Connection, NotABagError, Raw
+from medkit_replay.inputs.storage import (
+    MESSAGE_SIZE_LIMIT,
+    Connection,
+    NotABagError,
+    Raw,
+    temp_room,
+)
 from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
-    from pathlib import Path
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
-_COLUMNS = "SELECT id, topic_id, timestamp, data FROM messages"
+MAX_TOPICS = 65_536
+"""Most topics (and message definitions) read from one file; rosbag2 bags hold hundreds."""
+SCHEMA_VALUE_LIMIT = 1024 * 1024
+"""Longest topic name, type or message definition (bytes); real ones are a few KB."""
+SCHEMA_BYTES_LIMIT = 64 * 1024 * 1024
+"""Most bytes of topic names, types and definitions read from one file."""
+MAX_TOO_LARGE = 1000
+"""Most oversized rows skipped one by one before the rest of a file is given up."""
+MAX_TOPIC_PARAMETERS = 500
+"""Most topic ids named in a query (SQLite allows 32,766); beyond, rows are filtered here."""
+_SHOWN_IDS = 5
+
+# A row is read only with an integer id and an integer timestamp in [0, 2^63).
+_GOOD = "typeof(id) = 'integer' AND typeof(timestamp) = 'integer' AND timestamp >= 0"
+_TIME_RULE = "not an integer log time in [0, 2^63)"
 
 
-def _connect(path: Path, *, immutable: bool) -> sqlite3.Connection:
+_WAL_MAGICS = (0x377F0682, 0x377F0683)
+_WAL_VERSION = 3007000
+_WAL_HEADER = 32
+_FRAME_HEADER = 24
+
+
+def _committed_wal_bytes(wal: Path) -> int:
+    """Bytes of a ``-wal`` SQLite would apply: its header and frames up to the last commit.
+
+    SQLite stops at the first frame whose salts differ from the header's (as every hole of
+    a sparse file does), so nothing after it needs copying; 0 when no transaction is there.
+    """
+    with open_regular(wal) as stream:
+        header = stream.read(_WAL_HEADER)
+        if len(header) < _WAL_HEADER:
+            return 0
+        magic, version, page_size, _, *salts = struct.unpack(">6I", header[:24])
+        page_size = 65536 if page_size == 1 else page_size
+        if (
+            magic not in _WAL_MAGICS
+            or version != _WAL_VERSION
+            or not 512 <= page_size <= 65536
+            or page_size & (page_size - 1)
+        ):
+            return 0
+        frame = _FRAME_HEADER + page_size
+        position = end = _WAL_HEADER
+        while True:
+            stream.seek(position)
+            head = stream.read(16)
+            _, commit, *frame_salts = struct.unpack(">4I", head) if len(head) == 16 else (0, 0)
+            if frame_salts != salts or len(stream.read(frame - 16)) != frame - 16:
+                break
+            position += frame
+            if commit:
+                end = position
+        return end if end > _WAL_HEADER else 0
+
+
+def _copy_prefix(source: Path, target: Path, size: int) -> None:
+    with open_regular(source) as stream, target.open("wb") as sink:
+        while size > 0:
+            block = stream.read(min(size, 1 << 20))
+            if not block:
+                break
+            sink.write(block)
+            size -= len(block)
+
+
+def checkpointed_copy(
+    path: Path, warn: Callable[[str], None]
+) -> tuple[TemporaryDirectory[str], Path] | None:
+    """A temporary copy of ``path`` with its ``-wal`` applied, when the wal holds data.
+
+    ``immutable`` would ignore the wal; applying it in place would write beside the recording.
+    Only the wal's committed frames are copied, and only when they fit the temporary folder.
+    """
+    wal = path.with_name(path.name + "-wal")
+    journal = path.with_name(path.name + "-journal")
+    try:
+        if journal.is_file() and journal.stat().st_size:
+            warn(f"{path}: an unfinished transaction in {journal.name} is not read")
+        if not wal.exists():
+            return None
+        size = _committed_wal_bytes(wal)
+        database = path.stat().st_size
+    except (OSError, FileRefusedError) as exc:
+        warn(f"{path}: {wal.name} cannot be read ({exc}); its data is not read")
+        return None
+    if not size:
+        return None
+    if database + size > temp_room():
+        warn(
+            f"{path}: {wal.name} holds data not yet checkpointed, but applying it needs a "
+            f"{database + size:,}-byte copy, more than the temporary folder has room for; "
+            "its data is not read"
+        )
+        return None
+    folder = TemporaryDirectory(prefix="medkit-replay-")
+    try:
+        copy = Path(folder.name, path.name)
+        shutil.copyfile(path, copy)
+        _copy_prefix(wal, copy.with_name(wal.name), size)
+        with closing(sqlite3.connect(copy)) as db:
+            db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    except (OSError, sqlite3.Error) as exc:
+        folder.cleanup()
+        warn(f"{path}: {wal.name} cannot be applied ({exc}); its data is not read")
+        return None
+    except BaseException:
+        folder.cleanup()
+        raise
+    warn(f"{path}: {wal.name} holds data not yet checkpointed; read from a copy")
+    return folder, copy
+
+
+def _connect(path: Path, *, immutable: bool, limit: int) -> sqlite3.Connection:
     flags = "mode=ro&immutable=1" if immutable else "mode=ro"
     connection = sqlite3.connect(f"{path.absolute().as_uri()}?{flags}", uri=True)
+    # SQLite refuses to build a longer string or blob (a huge row, a generated column).
+    connection.setlimit(sqlite3.SQLITE_LIMIT_LENGTH, limit)
     connection.execute("PRAGMA query_only = ON")
     # Lets SQLite read a file shorter than its header claims (a truncated copy) up to its end.
     connection.execute("PRAGMA writable_schema = ON")
     return connection
+
+
+def _ids(ids: list[object], count: int) -> str:
+    shown = ", ".join(str(i) for i in ids[:_SHOWN_IDS])
+    return f"id {shown}" if count == 1 else f"ids {shown}{', ...' if count > len(ids) else ''}"
+
+
+def _rows(count: int) -> str:
+    return "1 message row" if count == 1 else f"{count:,} message rows"
+
+
+class _Losses:
+    """Rows skipped for one reason while reading: how many, and the first few ids."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.ids: list[object] = []
+
+    def add(self, rowid: object) -> None:
+        self.count += 1
+        if len(self.ids) < _SHOWN_IDS and isinstance(rowid, int):
+            self.ids.append(rowid)
 
 
 class Db3File:
@@ -47,85 +189,114 @@ class Db3File:
         self.start_ns: int | None = None
         self.end_ns: int | None = None
         self._counted = False
-        self._bad_rows = 0
+        self._bad_times: dict[int, int] = {}
         self._copy: TemporaryDirectory[str] | None = None
         try:
-            with path.open("rb") as bio:
+            with open_regular(path) as bio:
                 magic = bio.read(len(SQLITE_MAGIC))
         except OSError as exc:
             raise NotABagError(f"cannot read: {exc.strerror or exc}") from None
         if magic != SQLITE_MAGIC:
             raise NotABagError("not an SQLite database")
-        self._source = self._pending_wal() or path
+        copied = checkpointed_copy(path, warn)
+        self._source = path
+        if copied is not None:
+            self._copy, self._source = copied
         try:
-            with closing(_connect(self._source, immutable=True)) as db:
+            with closing(_connect(self._source, immutable=True, limit=SCHEMA_VALUE_LIMIT)) as db:
                 self._probe(db)
         except sqlite3.Error as exc:
             self.close()
             raise NotABagError(f"SQLite database cannot be read ({exc})") from None
-
-    def _pending_wal(self) -> Path | None:
-        """A checkpointed temporary copy when a ``-wal`` holds data ``immutable`` would ignore."""
-        wal = self.path.with_name(self.path.name + "-wal")
-        journal = self.path.with_name(self.path.name + "-journal")
-        if journal.is_file() and journal.stat().st_size:
-            self.warn(f"{self.path}: an unfinished transaction in {journal.name} is not read")
-        if not wal.is_file() or not wal.stat().st_size:
-            return None
-        self._copy = TemporaryDirectory(prefix="medkit-replay-")
-        copy = shutil.copy(self.path, self._copy.name)
-        shutil.copy(wal, self._copy.name)
-        try:
-            with closing(sqlite3.connect(copy)) as db:
-                db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
-        except sqlite3.Error as exc:
-            self.warn(f"{self.path}: {wal.name} cannot be applied ({exc}); its data is not read")
-            return None
-        self.warn(f"{self.path}: {wal.name} holds data not yet checkpointed; read from a copy")
-        return type(self.path)(copy)
 
     def _probe(self, db: sqlite3.Connection) -> None:
         try:
             self._read_topics(db)
         except (sqlite3.Error, TypeError, ValueError) as exc:
             raise NotABagError(f"damaged database: its topics cannot be read ({exc})") from None
+        orphans = 0
         try:
-            query = "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages"
-            for cid, count, first, last in db.execute(f"{query} GROUP BY topic_id"):
-                self.counts[int(cid)] = int(count)
-                self.start_ns = first if self.start_ns is None else min(self.start_ns, int(first))
-                self.end_ns = last if self.end_ns is None else max(self.end_ns, int(last))
+            query = (
+                "SELECT topic_id, SUM(ok), MIN(CASE WHEN ok THEN timestamp END), "
+                "MAX(CASE WHEN ok THEN timestamp END), SUM(NOT ok) "
+                f"FROM (SELECT topic_id, timestamp, ({_GOOD}) AS ok FROM messages) "
+                "GROUP BY topic_id"
+            )
+            for cid, count, first, last, bad in db.execute(query):
+                if not isinstance(cid, int) or cid not in self.connections:
+                    orphans += int(count) + int(bad)
+                    continue
+                if bad:
+                    self._bad_times[cid] = int(bad)
+                if not count:
+                    continue
+                self.counts[cid] = int(count)
+                self.start_ns = first if self.start_ns is None else min(self.start_ns, first)
+                self.end_ns = last if self.end_ns is None else max(self.end_ns, last)
             self._counted = True
         except (sqlite3.Error, TypeError, ValueError) as exc:
             self.counts.clear()
+            self._bad_times.clear()
             self.start_ns = self.end_ns = None
             self.warn(f"{self.path}: damaged database, messages cannot be counted ({exc})")
+            return
+        if orphans:
+            self.warn(f"{self.path}: {_rows(orphans)} name no declared topic; not read")
 
     def _read_topics(self, db: sqlite3.Connection) -> None:
         tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
         if not {"messages", "topics"} <= tables:
             raise NotABagError("SQLite database without rosbag2's messages and topics tables")
+        budget = SCHEMA_BYTES_LIMIT
         definitions: dict[str, Definition] = {}
         if "message_definitions" in tables:
             query = (
                 "SELECT topic_type, encoding, encoded_message_definition FROM message_definitions"
             )
-            for name, encoding, text in db.execute(query):
-                definitions[normalize_typename(str(name))] = Definition(str(encoding), str(text))
-        for cid, topic, msgtype, fmt in db.execute(
-            "SELECT id, name, type, serialization_format FROM topics ORDER BY id"
-        ):
-            name = normalize_typename(str(msgtype))
+            for name, encoding, text in db.execute(f"{query} LIMIT {MAX_TOPICS}"):
+                values = (str(name), str(encoding), str(text))
+                budget -= sum(len(value) for value in values)
+                if budget < 0:
+                    raise ValueError(f"topics and definitions exceed {SCHEMA_BYTES_LIMIT:,} bytes")
+                definitions[normalize_typename(values[0])] = Definition(values[1], values[2])
+        rows = self._topic_rows(db)
+        if len(rows) > MAX_TOPICS:
+            self.warn(f"{self.path}: more than {MAX_TOPICS:,} topics; the rest are not read")
+            del rows[MAX_TOPICS:]
+        for cid, topic, msgtype, fmt in rows:
+            if not (isinstance(cid, int) and isinstance(topic, str) and isinstance(msgtype, str)):
+                self.warn(f"{self.path}: topic row {cid!r}, {topic!r} is damaged; not read")
+                continue
+            budget -= len(topic) + len(msgtype) + len(str(fmt))
+            if budget < 0:
+                raise ValueError(f"topics and definitions exceed {SCHEMA_BYTES_LIMIT:,} bytes")
+            name = normalize_typename(msgtype)
+            if cid in self.connections:
+                kept = self.connections[cid]
+                if (kept.topic, kept.msgtype) != (topic, name):
+                    self.warn(
+                        f"{self.path}: topic id {cid} is declared twice ({kept.topic} of type "
+                        f"{kept.msgtype}, then {topic} of type {name}); its messages cannot be "
+                        f"told apart and are read as {kept.topic}, the first declared"
+                    )
+                continue
             definition = definitions.get(name) or NO_DEFINITION
             if name.endswith("_Event") and definition is NO_DEFINITION:
                 # rosbag2 stores a service event topic's definition under the service's name.
                 definition = definitions.get(name.removesuffix("_Event"), NO_DEFINITION)
-            self.connections[int(cid)] = Connection(
-                int(cid), str(topic), name, str(fmt), definition
-            )
+            self.connections[cid] = Connection(cid, topic, name, str(fmt), definition)
+
+    @staticmethod
+    def _topic_rows(db: sqlite3.Connection) -> list[tuple[object, ...]]:
+        """The topics table in id order, rows of one id in storage order (the first wins)."""
+        columns = "SELECT id, name, type, serialization_format FROM topics"
+        try:
+            return db.execute(f"{columns} ORDER BY id, rowid LIMIT {MAX_TOPICS + 1}").fetchall()
+        except sqlite3.OperationalError:  # a table without rowid: its key orders it
+            return db.execute(f"{columns} ORDER BY id LIMIT {MAX_TOPICS + 1}").fetchall()
 
     def close(self) -> None:
-        """Delete the temporary copy, if one was made."""
+        """Release the temporary copy, if one was made."""
         if self._copy is not None:
             self._copy.cleanup()
             self._copy = None
@@ -134,45 +305,115 @@ class Db3File:
         self, wants: Callable[[Connection], bool], cap_ns: int | None
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         """Yield bounds and wanted messages (see ``StorageFile.read``)."""
-        ids = [cid for cid, connection in self.connections.items() if wants(connection)]
-        if not ids:
+        wanted = {cid for cid, connection in self.connections.items() if wants(connection)}
+        if not wanted:
             return
-        cap = cap_ns if cap_ns is not None else 2**63
-        where = f"WHERE topic_id IN ({','.join('?' * len(ids))})"
-        last: tuple[int, int] | None = None
-        with closing(_connect(self._source, immutable=True)) as db:
-            try:
-                for row in db.execute(f"{_COLUMNS} {where} ORDER BY timestamp, id", ids):
-                    yield from self._row(row, cap)
-                    last = (row[2], row[0])
-                return
-            except sqlite3.DatabaseError as exc:
-                after = f"after t={last[0]}" if last else "from the start"
-                self.warn(
-                    f"{self.path}: damaged database ({exc}) {after}; reading on in storage order"
-                )
-            # The time index may be what is damaged: walk the table itself from the last row read.
-            resume = "AND (timestamp > ? OR (timestamp = ? AND id > ?))" if last else ""
-            args = [*ids, last[0], last[0], last[1]] if last else ids
-            query = f"{_COLUMNS} NOT INDEXED {where} {resume} ORDER BY id"
-            try:
-                for row in db.execute(query, args):
-                    yield from self._row(row, cap)
-            except sqlite3.DatabaseError as exc:
-                self.warn(f"{self.path}: damaged database ({exc}); the rest is lost")
-        if self._bad_rows:
-            self.warn(f"{self.path}: {self._bad_rows} damaged message rows skipped")
+        losses = {"data": _Losses(), "large": _Losses()}
+        try:
+            with closing(_connect(self._source, immutable=True, limit=MESSAGE_SIZE_LIMIT)) as db:
+                yield from self._messages(db, sorted(wanted), cap_ns, losses)
+                self._report_bad_times(db, wanted)
+        except sqlite3.Error as exc:
+            self.warn(f"{self.path}: damaged database ({exc}); its messages are lost")
+        data, large = losses["data"], losses["large"]
+        if data.count:
+            self.warn(
+                f"{self.path}: {_rows(data.count)} without a binary payload skipped "
+                f"({_ids(data.ids, data.count)})"
+            )
+        if large.count:
+            shown = _ids(large.ids, large.count)
+            self.warn(
+                f"{self.path}: {_rows(large.count)} with a payload that cannot be loaded "
+                f"within the {MESSAGE_SIZE_LIMIT:,}-byte limit skipped ({shown})"
+            )
 
-    def _row(self, row: tuple[object, ...], cap: int) -> Iterator[Bound | Timed[Raw]]:
+    def _messages(
+        self,
+        db: sqlite3.Connection,
+        ids: list[int],
+        cap_ns: int | None,
+        losses: dict[str, _Losses],
+    ) -> Iterator[Bound | Timed[Raw]]:
+        """Rows in time order; past damage to the time index, the rest in storage order."""
+        cap = cap_ns if cap_ns is not None else 2**63
+        if len(ids) <= MAX_TOPIC_PARAMETERS:
+            where, params = f"topic_id IN ({','.join('?' * len(ids))}) AND {_GOOD}", ids
+        else:
+            where, params = _GOOD, []
+        wanted = set(ids)
+        # Resume points: the last row read in time order, then the last id in storage order.
+        last: tuple[int, int] | None = None
+        last_id: int | None = None
+        indexed = True
+        skips = 0
+        while True:
+            after, args = _after(last, last_id)
+            source = "messages" if indexed else "messages NOT INDEXED"
+            order = "timestamp, id" if indexed else "id"
+            rows = f"FROM {source} WHERE {where}{after} ORDER BY {order}"
+            try:
+                for row in db.execute(
+                    f"SELECT id, topic_id, timestamp, data {rows}", params + args
+                ):
+                    if indexed:
+                        last = (row[2], row[0])
+                    else:
+                        last_id = row[0]
+                    yield from self._emit(row, wanted, cap, losses)
+                return
+            except sqlite3.DataError:
+                # A row's payload is over the length limit. sqlite3 fetches one row ahead, so
+                # it is the next row or the one after: load the next alone to find out.
+                skips += 1
+                try:
+                    found = db.execute(
+                        f"SELECT id, topic_id, timestamp {rows} LIMIT 1", params + args
+                    ).fetchone()
+                except sqlite3.DatabaseError:
+                    found = None
+                if found is None or skips > MAX_TOO_LARGE:
+                    self.warn(
+                        f"{self.path}: rows past the limit cannot be skipped; the rest is lost"
+                    )
+                    return
+                if indexed:
+                    last = (found[2], found[0])
+                else:
+                    last_id = found[0]
+                try:
+                    alone = db.execute("SELECT data FROM messages WHERE id = ?", found[:1])
+                    yield from self._emit(
+                        (*found, *(alone.fetchone() or (None,))), wanted, cap, losses
+                    )
+                except sqlite3.DataError:
+                    losses["large"].add(found[0])
+            except sqlite3.DatabaseError as exc:
+                if not indexed:
+                    self.warn(f"{self.path}: damaged database ({exc}); the rest is lost")
+                    return
+                after_text = f"after t={last[0]}" if last else "from the start"
+                self.warn(
+                    f"{self.path}: damaged database ({exc}) {after_text}; "
+                    "reading on in storage order"
+                )
+                # The time index may be what is damaged: walk the table itself.
+                indexed = False
+
+    def _emit(
+        self,
+        row: tuple[object, ...],
+        wanted: set[int],
+        cap: int,
+        losses: dict[str, _Losses],
+    ) -> Iterator[Bound | Timed[Raw]]:
         rowid, cid, t_ns, data = row
-        if not (
-            isinstance(rowid, int)
-            and isinstance(cid, int)
-            and isinstance(t_ns, int)
-            and isinstance(data, bytes)
-            and cid in self.connections
-        ):
-            self._bad_rows += 1
+        if not (isinstance(cid, int) and isinstance(rowid, int) and isinstance(t_ns, int)):
+            return  # not selected (the query reads integer ids and times only)
+        if cid not in wanted:
+            return
+        if not isinstance(data, bytes):
+            losses["data"].add(rowid)
             return
         if not self._counted:
             self.counts[cid] = self.counts.get(cid, 0) + 1
@@ -180,3 +421,39 @@ class Db3File:
             self.end_ns = t_ns if self.end_ns is None else max(self.end_ns, t_ns)
         yield Bound(min(t_ns, cap))
         yield Timed(t_ns, (self.file_no, rowid, 0), Raw(self.connections[cid], data))
+
+    def _report_bad_times(self, db: sqlite3.Connection, wanted: set[int]) -> None:
+        """Warn about wanted rows skipped because their log time is unusable."""
+        count = sum(self._bad_times.get(cid, 0) for cid in wanted)
+        if self._counted and not count:
+            return
+        ids: list[object] = []
+        found = 0
+        try:
+            query = f"SELECT id, topic_id FROM messages WHERE NOT ({_GOOD}) ORDER BY id"
+            for rowid, cid in db.execute(query):
+                if cid not in wanted:
+                    continue
+                found += 1
+                if len(ids) < _SHOWN_IDS:
+                    ids.append(rowid)
+                elif self._counted:
+                    break
+        except sqlite3.Error:
+            pass  # the count from the probe still stands
+        if not self._counted:
+            count = found
+        if count:
+            self.warn(f"{self.path}: {_rows(count)} skipped: {_TIME_RULE} ({_ids(ids, count)})")
+
+
+def _after(last: tuple[int, int] | None, last_id: int | None) -> tuple[str, list[int]]:
+    """The condition (and its arguments) for the rows after the resume points."""
+    text, args = "", []
+    if last is not None:
+        text += " AND (timestamp > ? OR (timestamp = ? AND id > ?))"
+        args += [last[0], last[0], last[1]]
+    if last_id is not None:
+        text += " AND id > ?"
+        args.append(last_id)
+    return text, args

@@ -5,6 +5,8 @@ Holds no reading code; the MCAP and sqlite3 readers and the rosbag2 layer above 
 
 from __future__ import annotations
 
+import os
+import tempfile
 from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
@@ -20,6 +22,25 @@ RECORD_SIZE_LIMIT = 1 << 30
 
 A length above it, or above what is left of the file, is treated as damage, not obeyed.
 """
+
+MESSAGE_SIZE_LIMIT = 256 * 1024 * 1024
+"""Largest payload one sqlite3 message row may make a reader load (bytes); larger is damage.
+
+No ROS message the replay reads comes near it (a raw 4K camera frame is 25 MB), and SQLite
+itself would build a blob up to 1 GB (or a generated column computes one) before we see it.
+"""
+
+TEMP_MARGIN = 256 * 1024 * 1024
+"""Free space (bytes) a temporary copy or decompressed file must leave in the temporary folder."""
+
+
+def temp_room() -> int:
+    """Bytes a temporary file may take in the temporary folder: its free space less TEMP_MARGIN."""
+    try:
+        info = os.statvfs(tempfile.gettempdir())
+    except OSError:
+        return 0
+    return max(0, info.f_bavail * info.f_frsize - TEMP_MARGIN)
 
 
 class Connection(NamedTuple):
