@@ -38,3 +38,12 @@ def xml_text(text: str) -> str:
     """Text XML 1.0 can hold, and a CI page shows as it is: characters XML forbids (NUL, ESC,
     lone surrogates), C1 controls, U+2028, U+2029 and bidirectional controls as escapes."""
     return _NOT_XML.sub(lambda m: _escape_char(m.group()), text)
+
+
+def clip(text: str, limit: int) -> str:
+    """At most ``limit`` characters of ``text``; a longer text is cut and ends with an ellipsis
+    and how many characters were left out (``abc... (+9,997 characters)``, ASCII for any
+    terminal)."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... (+{len(text) - limit:,} characters)"

@@ -2,7 +2,8 @@
 
 Inline CSS and vanilla JS (package data in html_assets/), data for the JS as escaped JSON in a
 ``<script type="application/json">``; no network fetch, no clock, no random ids: same Result, same
-bytes. Reads only the Result.
+bytes. Reads only the Result. Recorded text is cut (cells, tooltips, warnings), so the page grows
+with the number of faults and records, never with the length of a string a recording holds.
 """
 
 from __future__ import annotations
@@ -14,17 +15,23 @@ from datetime import UTC, datetime
 from importlib import resources
 from typing import TYPE_CHECKING
 
+from medkit_replay.checks.text import clip
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_tables import (
+    CELL_CAP,
     esc,
     json_pre,
+    listed,
     object_block,
     record_tables,
+    short,
     table,
     text,
     when,
 )
 from medkit_replay.outputs.html_timeline import (
+    LIST_CAP,
     ROW_CAP,
     Span,
     build_lanes,
@@ -40,6 +47,7 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 EPOCH_LIKE_NS = 10**17
+WARNING_CAP = 500  # characters of one warning shown; the JSON report has it whole
 AXIS_TICKS = 10  # ticks drawn without JavaScript; the script redraws them for each zoom
 
 
@@ -69,7 +77,11 @@ def _utc(t_ns: int) -> str:
     # Only for clock-like stamps (after 1973); scripts often count from zero.
     if t_ns < EPOCH_LIKE_NS:
         return ""
-    stamp = datetime.fromtimestamp(t_ns // NS_PER_SEC, tz=UTC).strftime("%Y-%m-%d %H:%M:%S")
+    try:
+        moment = datetime.fromtimestamp(t_ns // NS_PER_SEC, tz=UTC)
+    except (OverflowError, ValueError, OSError):  # beyond what a date can show (year 10000)
+        return ""
+    stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
     return f" ({stamp}.{t_ns % NS_PER_SEC // 1_000_000:03d} UTC)"
 
 
@@ -86,11 +98,12 @@ def _header(result: Result, span: Span) -> str:
             f"{s.duration_ns / 1e9:.3f} s of bag time, from {s.start_ns} ns{_utc(s.start_ns)} to "
             f"{s.end_ns} ns (times below are seconds from the start)"
         )
-    names = ", ".join(i.path for i in result.inputs) or "no input"
+    names = listed(i.path for i in result.inputs) or "no input"
     inputs = []
     for item in result.inputs:
         topics = "".join(
-            f"<tr><td>{esc(t.topic)}</td><td>{esc(t.type)}</td><td>{esc(t.role or '—')}</td>"
+            f"<tr><td>{esc(clip(t.topic, CELL_CAP))}</td><td>{esc(clip(t.type, CELL_CAP))}</td>"
+            f"<td>{esc(t.role or '—')}</td>"
             f'<td class="n">{t.messages:,}</td></tr>'
             for t in item.topics
         )
@@ -103,11 +116,12 @@ def _header(result: Result, span: Span) -> str:
         first = "—" if item.start_ns is None else span.label(item.start_ns)
         last = "—" if item.end_ns is None else span.label(item.end_ns)
         inputs.append(
-            f'<tr><td class="path">{esc(item.path)}</td><td>{esc(item.storage)}</td>'
+            f'<tr><td class="path">{esc(clip(item.path, CELL_CAP))}</td>'
+            f"<td>{esc(item.storage)}</td>"
             f'<td>{esc(first)} \u2013 {esc(last)}</td><td class="n">{item.message_count:,}</td>'
             f"<td>{topic_block}</td></tr>"
         )
-    warnings = "".join(f"<li>{esc(w)}</li>" for w in result.warnings)
+    warnings = "".join(f"<li>{esc(clip(w, WARNING_CAP))}</li>" for w in result.warnings)
     warn_block = (
         f'<section id="warnings" class="warnings" role="alert"><h2>⚠ {len(result.warnings)} '
         f"warning{'s' if len(result.warnings) != 1 else ''}</h2><ul>{warnings}</ul></section>"
@@ -154,15 +168,19 @@ def _row(index: int, lane: Lane, span: Span) -> str:
     f = lane.fault
     tags = []
     if f.muted:
-        tags.append(f'<span class="tag tag-muted">muted ← {esc(f.root_cause_code or "?")}</span>')
-    tags.extend(f'<span class="tag tag-cluster">{esc(c)}</span>' for c in f.cluster_ids)
-    sources = ", ".join(f.reporting_sources) or "—"
+        root = short(f.root_cause_code or "?")
+        tags.append(f'<span class="tag tag-muted">muted ← {esc(root)}</span>')
+    clusters = f.cluster_ids[:LIST_CAP]
+    tags.extend(f'<span class="tag tag-cluster">{esc(short(c))}</span>' for c in clusters)
+    if len(f.cluster_ids) > LIST_CAP:
+        tags.append(f'<span class="tag">+{len(f.cluster_ids) - LIST_CAP:,} more</span>')
+    sources = listed(f.reporting_sources) or "—"
     tip = (
-        f"{f.fault_code}\n{f.description}\nstatus {f.status}, "
+        f"{f.fault_code}\n{short(f.description)}\nstatus {f.status}, "
         f"severity {severity_name(f.severity)}, occurrences {f.occurrence_count}\n"
         f"sources: {sources}\n"
-        + (f"muted by {f.root_cause_code}\n" if f.muted else "")
-        + (f"clusters: {', '.join(f.cluster_ids)}\n" if f.cluster_ids else "")
+        + (f"muted by {short(f.root_cause_code or '?')}\n" if f.muted else "")
+        + (f"clusters: {listed(f.cluster_ids)}\n" if f.cluster_ids else "")
         + "click for the debounce counter and near misses"
     )
     bands = "".join(
@@ -247,7 +265,7 @@ def _correlation(result: Result, span: Span) -> str:
     def rule_text(rule_id: str) -> str:
         rule = rules.get(rule_id, {})
         name = rule.get("name")
-        return f"{rule_id} — {name}" if name else rule_id
+        return short(f"{rule_id} — {name}" if name else rule_id)
 
     muted_rows = []
     for m in result.muted_faults:
@@ -286,11 +304,11 @@ def _correlation(result: Result, span: Span) -> str:
             for code in c.fault_codes
         )
         cards.append(
-            f'<div class="cluster"><h4>{esc(c.cluster_id)} <span class="muted-text">'
-            f"{esc(rule_text(c.rule_id))}</span></h4><p>{esc(c.label)}</p><dl>"
+            f'<div class="cluster"><h4>{esc(short(c.cluster_id))} <span class="muted-text">'
+            f"{esc(rule_text(c.rule_id))}</span></h4><p>{esc(clip(c.label, CELL_CAP))}</p><dl>"
             f'<dt>representative</dt><dd><span class="code-link" data-open="'
             f'{esc(c.representative_code)}">{esc(c.representative_code)}</span> '
-            f"({esc(c.representative_severity)})</dd><dt>members</dt><dd>{c.count}<ul>{members}"
+            f"({esc(short(c.representative_severity))})</dd><dt>members</dt><dd>{c.count}<ul>{members}"
             f"</ul></dd><dt>span</dt><dd>{esc(span.label(c.first_at_ns))} \u2013 "
             f"{esc(span.label(c.last_at_ns))} ({(c.last_at_ns - c.first_at_ns) / 1e9:.3f} s)"
             f"</dd></dl></div>"
@@ -301,7 +319,7 @@ def _correlation(result: Result, span: Span) -> str:
         "Retroactive cluster mutes (information only)",
         ["t (s)", "cluster", "fault codes"],
         (
-            [when(span, r.t_ns), text(r.cluster_id), text(", ".join(r.fault_codes))]
+            [when(span, r.t_ns), text(r.cluster_id), text(listed(r.fault_codes))]
             for r in result.retroactive_mutes
         ),
         len(result.retroactive_mutes),
@@ -319,7 +337,7 @@ def _correlation(result: Result, span: Span) -> str:
 def _parity(parity: dict[str, object] | None, span: Span) -> str:
     if parity is None:
         return ""
-    verdict = esc(parity.get("verdict", ""))
+    verdict = esc(short(parity.get("verdict", "")))
     return (
         f'<section id="parity"><h2>Parity with the recorded FaultEvents <span class="verdict '
         f'v-{verdict}">{verdict}</span></h2>{object_block("parity", parity, span)}</section>'
@@ -336,7 +354,7 @@ def render_html(result: Result) -> str:
         "default-src 'none'; img-src data:; style-src 'unsafe-inline'; "
         f"script-src 'sha256-{digest}'; base-uri 'none'; form-action 'none'"
     )
-    title = ", ".join(i.path for i in result.inputs) or "no input"
+    title = listed(i.path for i in result.inputs) or "no input"
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
@@ -363,5 +381,7 @@ def render_html(result: Result) -> str:
 
 
 def write_html(result: Result, path: Path) -> None:
-    """Write the page to a file (UTF-8)."""
-    path.write_text(render_html(result), encoding="utf-8", newline="\n")
+    """Write the page to a file (UTF-8) through a temporary file renamed into place."""
+    page = render_html(result)
+    with atomic_text(path) as stream:
+        stream.write(page)

@@ -1,6 +1,7 @@
 """Sortable, filterable HTML tables of the report's records, capped at a fixed number of rows.
 
-Every text lands escaped; numbers carry their sort key in ``data-v``. Reads only the Result.
+Every text lands escaped, bidirectional controls and U+2028/9 as visible escapes, and cut at
+CELL_CAP characters; numbers carry their sort key in ``data-v``. Reads only the Result.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ import json
 from itertools import islice
 from typing import TYPE_CHECKING
 
-from medkit_replay.outputs.html_timeline import severity_name
+from medkit_replay.checks.text import clip, xml_text
+from medkit_replay.outputs.html_timeline import LIST_CAP, TEXT_CAP, severity_name
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Iterator
@@ -19,6 +21,7 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 TABLE_CAP = 2000  # rows per table embedded in the page; the JSON report and CSV hold them all
+CELL_CAP = 300  # characters of one cell shown (recorded text can be megabytes); JSON has it all
 
 # (text shown, numeric sort key or None)
 Cell = tuple[str, int | None]
@@ -26,8 +29,26 @@ Row = list[Cell]
 
 
 def esc(text: object) -> str:
-    """Text escaped for HTML content and quoted attributes."""
-    return html.escape(str(text), quote=True)
+    """Text escaped for HTML content and quoted attributes; control and bidirectional
+    characters, U+2028/9 and lone surrogates shown as escapes (``\\u202e``), see checks/text.py."""
+    return html.escape(xml_text(str(text)), quote=True)
+
+
+def short(value: object, limit: int = TEXT_CAP) -> str:
+    """Recorded text for a label or a tooltip: at most ``limit`` characters (ellipsis)."""
+    return clip(str(value), limit)
+
+
+def listed(items: Iterable[object], limit: int = LIST_CAP) -> str:
+    """A list joined with commas: its first ``limit`` items (each cut), then ``+N more``."""
+    shown: list[str] = []
+    more = 0
+    for item in items:
+        if len(shown) < limit:
+            shown.append(short(item))
+        else:
+            more += 1
+    return ", ".join(shown) + (f", +{more:,} more" if more else "")
 
 
 def text(value: object) -> Cell:
@@ -64,11 +85,11 @@ def table(
     body = []
     for row in islice(rows, TABLE_CAP):
         cells = "".join(
-            f'<td data-v="{key}">{esc(shown)}</td>'
+            f'<td data-v="{key}">{esc(clip(shown, CELL_CAP))}</td>'
             if key is not None
-            else f'<td class="code">{esc(shown)}</td>'
+            else f'<td class="code">{esc(clip(shown, CELL_CAP))}</td>'
             if i in codes
-            else f"<td>{esc(shown)}</td>"
+            else f"<td>{esc(clip(shown, CELL_CAP))}</td>"
             for i, (shown, key) in enumerate(row)
         )
         body.append(f"<tr>{cells}</tr>")
@@ -106,9 +127,9 @@ def _fault_rows(result: Result, span: Span) -> Iterator[Row]:
             when(span, f.last_occurred_ns),
             when(span, f.last_passed_ns) if f.last_passed_ns else ("never", -1),
             num(f.occurrence_count),
-            text(", ".join(f.reporting_sources)),
+            text(listed(f.reporting_sources)),
             text(f"by {f.root_cause_code}" if f.muted else ""),
-            text(", ".join(f.cluster_ids)),
+            text(listed(f.cluster_ids)),
         ]
 
 
@@ -121,8 +142,8 @@ def _event_rows(result: Result, span: Span) -> Iterator[Row]:
             text(e.fault.status),
             (severity_name(e.fault.severity), e.fault.severity),
             num(e.fault.occurrence_count),
-            text(", ".join(e.fault.reporting_sources)),
-            text(", ".join(e.auto_cleared_codes)),
+            text(listed(e.fault.reporting_sources)),
+            text(listed(e.auto_cleared_codes)),
         ]
 
 
@@ -163,7 +184,7 @@ def _clear_rows(result: Result, span: Span) -> Iterator[Row]:
             text("yes" if c.skip_correlation_auto_clear else "no"),
             text("yes" if c.success else "no"),
             text(c.message),
-            text(", ".join(c.auto_cleared_codes)),
+            text(listed(c.auto_cleared_codes)),
         ]
 
 
@@ -268,7 +289,8 @@ def _cell(key: str, value: object, span: Span) -> Cell:
 def object_block(name: str, value: dict[str, object], span: Span) -> str:
     """A JSON object for people: scalars as a list, lists of objects as sortable tables."""
     scalars = "".join(
-        f"<dt>{esc(k)}</dt><dd>{esc(json.dumps(v) if v is None or isinstance(v, bool) else v)}</dd>"
+        f"<dt>{esc(short(k))}</dt>"
+        f"<dd>{esc(short(json.dumps(v) if v is None or isinstance(v, bool) else v, CELL_CAP))}</dd>"
         for k, v in value.items()
         if not isinstance(v, list | dict)
     )
@@ -277,7 +299,8 @@ def object_block(name: str, value: dict[str, object], span: Span) -> str:
         slug = f"{name}-{key}".replace("_", "-").lower()
         if isinstance(item, dict):
             blocks.append(
-                f"<h4>{esc(key)}</h4><div class=nested>{object_block(slug, item, span)}</div>"
+                f"<h4>{esc(short(key))}</h4><div class=nested>"
+                f"{object_block(slug, item, span)}</div>"
             )
         elif isinstance(item, list):
             rows = [r if isinstance(r, dict) else {"value": r} for r in item]

@@ -2,6 +2,7 @@
 
 Reads only the Result, one pass over each record list; every list it keeps is bounded, and the
 bounding is deterministic (fixed caps, time bins over the recording's span, first-come order).
+Recorded text in tooltips and in the page's data is cut at TEXT_CAP characters and made visible.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from medkit_replay.checks.text import clip, xml_text
 from medkit_replay.model import NS_PER_SEC, Severity
 from medkit_replay.result import STATUSES
 
@@ -24,6 +26,8 @@ MARKER_BINS = 200
 TRACE_CAP = 1000  # counter-trace points per fault; beyond it, min and max per bin
 TRACE_BINS = 500
 NEAR_CAP = 200  # near misses listed per fault
+TEXT_CAP = 200  # characters of one recorded text in a tooltip or the page's data
+LIST_CAP = 20  # items of one recorded list (sources, clusters, codes) shown
 
 # Most serious first: binned bands show the worst status of their interval.
 STATUS_RANK = {"CLEARED": 0, "HEALED": 1, "PREPASSED": 2, "PREFAILED": 3, "CONFIRMED": 4}
@@ -33,6 +37,19 @@ MARKER_ORDER = {"fault_confirmed": 0, "fault_updated": 1, "fault_cleared": 2, "c
 
 # t_s, counter, confirmation threshold, healing threshold, PASSED (0/1), status index
 TracePoint = tuple[float, int, int, int, int, int]
+
+
+def shown(value: str | None, limit: int = TEXT_CAP) -> str | None:
+    """Recorded text for the page: cut at ``limit`` characters, controls made visible."""
+    return None if value is None else xml_text(clip(value, limit))
+
+
+def shown_list(values: tuple[str, ...]) -> list[str | None]:
+    """The first LIST_CAP items of a recorded list, each ``shown``, then ``+N more``."""
+    items = [shown(value) for value in values[:LIST_CAP]]
+    if len(values) > LIST_CAP:
+        items.append(f"+{len(values) - LIST_CAP:,} more")
+    return items
 
 
 def severity_name(severity: int) -> str:
@@ -233,7 +250,7 @@ def _kept_codes(faults: tuple[FaultSnapshot, ...]) -> set[str]:
 
 
 def _band_tip(span: Span, start: int, end: int, status: str, cause: str, source: str | None) -> str:
-    origin = f" from {source}" if source else ""
+    origin = f" from {clip(source, TEXT_CAP)}" if source else ""
     return f"{status}  {span.label(start)} \u2013 {span.label(end)}\nentered by {cause}{origin}"
 
 
@@ -261,7 +278,7 @@ def build_lanes(result: Result, span: Span) -> list[Lane]:
     for event in result.events:
         code = event.fault.fault_code
         if code in kept:
-            auto = ", ".join(event.auto_cleared_codes)
+            auto = ", ".join(map(str, shown_list(event.auto_cleared_codes)))
             tip = (
                 f"{event.event_type} at {span.label(event.t_ns)}\nstatus {event.fault.status}, "
                 f"severity {severity_name(event.fault.severity)}, "
@@ -272,7 +289,8 @@ def build_lanes(result: Result, span: Span) -> list[Lane]:
     for clear in result.clears:
         if clear.fault_code in kept:
             verdict = "succeeded" if clear.success else "failed"
-            tip = f"ClearFault at {span.label(clear.t_ns)}: {verdict}\n{clear.message}".rstrip()
+            message = clip(clear.message, TEXT_CAP)
+            tip = f"ClearFault at {span.label(clear.t_ns)}: {verdict}\n{message}".rstrip()
             markers[clear.fault_code].add(Marker(clear.t_ns, "clear", tip))
     for report in result.reports:
         if report.fault_code not in kept or not report.accepted:
@@ -322,16 +340,16 @@ def page_data(lanes: list[Lane], span: Span) -> dict[str, object]:
                 "code": lane.fault.fault_code,
                 "status": lane.fault.status,
                 "severity": severity_name(lane.fault.severity),
-                "description": lane.fault.description,
-                "sources": list(lane.fault.reporting_sources),
+                "description": shown(lane.fault.description),
+                "sources": shown_list(lane.fault.reporting_sources),
                 "occurrences": lane.fault.occurrence_count,
                 "first_s": span.seconds(lane.fault.first_occurred_ns),
                 "last_s": span.seconds(lane.fault.last_occurred_ns),
                 "last_passed_s": span.seconds(lane.fault.last_passed_ns)
                 if lane.fault.last_passed_ns
                 else None,
-                "muted_by": lane.fault.root_cause_code if lane.fault.muted else None,
-                "clusters": list(lane.fault.cluster_ids),
+                "muted_by": shown(lane.fault.root_cause_code) if lane.fault.muted else None,
+                "clusters": shown_list(lane.fault.cluster_ids),
                 "trace": [list(p) for p in lane.trace],
                 "trace_count": lane.trace_count,
                 "near": [
@@ -340,7 +358,7 @@ def page_data(lanes: list[Lane], span: Span) -> dict[str, object]:
                         n.debounce_counter,
                         n.confirmation_threshold,
                         severity_name(n.severity),
-                        n.source_id,
+                        shown(n.source_id),
                         n.resulting_status,
                     ]
                     for n in lane.near

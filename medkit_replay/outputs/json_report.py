@@ -1,6 +1,7 @@
 """The JSON report, schema ``medkit-replay/report/v1`` (cli-and-report.md §3).
 
-Schema history: v1 (0.1.0) — first version. Byte-identical for the same Result.
+Schema history: v1 (0.1.0) — first version. Byte-identical for the same Result. Strict JSON:
+every number in it is an integer (times, counts), and the encoders refuse NaN and Infinity.
 """
 
 from __future__ import annotations
@@ -217,11 +218,11 @@ def to_report(result: Result) -> JsonObject:
 
 
 def _dump(value: object, indent: str) -> str:
-    text = json.dumps(value, indent=2, ensure_ascii=True)
+    text = json.dumps(value, indent=2, ensure_ascii=True, allow_nan=False)
     return text.replace("\n", "\n" + indent)
 
 
-_ROW = json.JSONEncoder(ensure_ascii=True, separators=(", ", ": "))
+_ROW = json.JSONEncoder(ensure_ascii=True, separators=(", ", ": "), allow_nan=False)
 
 
 def write_json(result: Result, stream: IO[str]) -> None:

@@ -7,6 +7,11 @@ Two topics, each message stamped with the bag time of the change (log time = pub
 - ``/medkit_replay/transitions``: ``medkit_replay_msgs/msg/FaultTransition``, every status change
   (also the silent ones, e.g. auto-confirmation), a small message type of medkit-replay's own.
 
+``builtin_interfaces/Time`` has an int32 ``sec``, as upstream's: a bag time it cannot hold
+(before 1901-12-13 20:45:52 or after 2038-01-19 03:14:07 UTC) is saturated to its nearest end,
+``sec`` -2^31 with ``nanosec`` 0 or ``sec`` 2^31-1 with ``nanosec`` 999999999; the log and publish
+times (uint64 nanoseconds) keep the exact bag time. One warning says how many stamps were.
+
 The file is a rosbag2 MCAP (profile ``ros2``, CDR, schemas as ``ros2msg`` text with their
 dependencies appended in rosbag2's ``====`` / ``MSG:`` layout), so Foxglove, rosbags, the ``mcap``
 tools and medkit-replay itself read it without any ROS package installed. Same result, same bytes.
@@ -15,19 +20,21 @@ tools and medkit-replay itself read it without any ROS package installed. Same r
 from __future__ import annotations
 
 import heapq
+import sys
 from functools import cache
 from importlib import resources
-from typing import TYPE_CHECKING, BinaryIO, Protocol, cast
+from typing import IO, TYPE_CHECKING, BinaryIO, Protocol, cast
 
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from medkit_replay.inputs.typestore import MEDKIT_PACKAGE, Definition, types_from_definition
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
-    from collections.abc import Iterator
+    from collections.abc import Callable, Iterator
     from pathlib import Path
 
     from rosbags.typesys.store import MsgType, Typestore
@@ -87,6 +94,11 @@ DEFAULT_QOS = """\
 """rclcpp's default QoS, offered on both topics (rosbag2's ``offered_qos_profiles`` layout)."""
 
 _RULE = "=" * 80
+SEC_MIN = -(2**31)
+SEC_MAX = 2**31 - 1
+"""builtin_interfaces/Time.sec is an int32."""
+UINT64_MAX = 2**64 - 1
+UINT32_MAX = 2**32 - 1
 
 
 class _McapWriter(Protocol):
@@ -137,8 +149,30 @@ def message_store() -> Typestore:
     return store
 
 
-def _time(store: Typestore, t_ns: int) -> MsgType:
+def time_fields(t_ns: int) -> tuple[int, int, bool]:
+    """``sec`` and ``nanosec`` of a builtin_interfaces/Time for a bag time, and whether it had
+    to be saturated to int32 seconds (see the module's docstring)."""
     sec, nanosec = divmod(t_ns, NS_PER_SEC)
+    if sec < SEC_MIN:
+        return SEC_MIN, 0, True
+    if sec > SEC_MAX:
+        return SEC_MAX, NS_PER_SEC - 1, True
+    return sec, nanosec, False
+
+
+def saturated_stamps(result: Result) -> int:
+    """How many stamps of the file ``time_fields`` saturates."""
+    count = sum(time_fields(t.t_ns)[2] for t in result.transitions)
+    for event in result.events:
+        fault = event.fault
+        for t_ns in (event.t_ns, fault.first_occurred_ns, fault.last_occurred_ns):
+            count += time_fields(t_ns)[2]
+        count += time_fields(fault.last_passed_ns)[2]
+    return count
+
+
+def _time(store: Typestore, t_ns: int) -> MsgType:
+    sec, nanosec, _ = time_fields(t_ns)
     return store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
 
 
@@ -193,7 +227,7 @@ def _timeline(result: Result) -> Iterator[tuple[int, int, str, bytes]]:
             yield t_ns, order, topic, transition_cdr(cast("Transition", item))
 
 
-def write_mcap_stream(result: Result, stream: BinaryIO) -> dict[str, int]:
+def write_mcap_stream(result: Result, stream: BinaryIO | IO[bytes]) -> dict[str, int]:
     """Write the MCAP to an open binary stream; returns the messages written per topic."""
     writer = cast("_McapWriter", Writer(stream, compression=CompressionType.ZSTD))
     writer.start(profile="ros2", library=f"medkit-replay {__version__}")
@@ -206,13 +240,25 @@ def write_mcap_stream(result: Result, stream: BinaryIO) -> dict[str, int]:
     counts = dict.fromkeys(channels, 0)
     for t_ns, _, topic, payload in _timeline(result):
         counts[topic] += 1
-        writer.add_message(channels[topic], t_ns, payload, t_ns, counts[topic])
+        log_time = min(max(t_ns, 0), UINT64_MAX)
+        sequence = counts[topic] & UINT32_MAX
+        writer.add_message(channels[topic], log_time, payload, log_time, sequence)
     writer.finish()
     return counts
 
 
-def write_mcap(result: Result, path: Path) -> dict[str, int]:
-    """Write the replayed FaultEvents and status changes to an MCAP file at ``path``.
+def _warn(message: str) -> None:
+    sys.stderr.write(f"medkit-replay: warning: {message}\n")
+
+
+def write_mcap(
+    result: Result, path: Path, *, warn: Callable[[str], None] = _warn
+) -> dict[str, int]:
+    """Write the replayed FaultEvents and status changes to an MCAP file at ``path``, through a
+    temporary file renamed into place (whole or not at all).
+
+    Stamps that builtin_interfaces/Time cannot hold are saturated (module docstring), with one
+    warning for the file.
 
     Returns:
         Messages written per topic.
@@ -220,5 +266,13 @@ def write_mcap(result: Result, path: Path) -> dict[str, int]:
     Raises:
         OSError: the file cannot be written.
     """
-    with path.open("wb") as stream:
-        return write_mcap_stream(result, stream)
+    with atomic_binary(path) as stream:
+        counts = write_mcap_stream(result, stream)
+    saturated = saturated_stamps(result)
+    if saturated:
+        warn(
+            f"{path}: {saturated:,} stamp(s) outside builtin_interfaces/Time's int32 "
+            f"seconds (before 1901-12-13 or after 2038-01-19 UTC) saturated to sec {SEC_MIN} or "
+            f"{SEC_MAX}; log times and the JSON report hold the exact bag times"
+        )
+    return counts

@@ -7,13 +7,18 @@ is a one-line error, exit 2. Every table keeps a fixed Arrow schema, even when i
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING, Any
 
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.outputs.tables import TABLE_COLUMNS, result_tables
+from medkit_replay.outputs.atomic import atomic_binary
+from medkit_replay.outputs.tables import TABLE_COLUMNS, encodable, result_tables
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
     from pathlib import Path
+
+    import pandas as pd
 
     from medkit_replay.result import Result
 
@@ -40,6 +45,8 @@ INT_COLUMNS = frozenset(
 BOOL_COLUMNS = frozenset({"muted", "accepted", "success", "skip_correlation_auto_clear"})
 LIST_COLUMNS = frozenset({"reporting_sources", "cluster_ids", "auto_cleared_codes", "fault_codes"})
 """Columns stored as list<string>; every other column is a (nullable) string."""
+INT64_MIN = -(2**63)
+INT64_MAX = 2**63 - 1
 
 
 class MissingDependencyError(MedkitReplayError):
@@ -77,8 +84,39 @@ def arrow_schema(table: str) -> Any:
     return pa.schema(fields)
 
 
-def write_parquet(result: Result, directory: Path) -> list[Path]:
+def _clamp(value: object) -> object:
+    if isinstance(value, int) and not INT64_MIN <= value <= INT64_MAX:
+        return min(max(value, INT64_MIN), INT64_MAX)
+    return value
+
+
+def clamped(frame: pd.DataFrame) -> tuple[pd.DataFrame, int]:
+    """The table with every integer int64 cannot hold (a time at or after 2^63 ns, from a
+    script or a damaged bag) saturated to int64's range, and how many cells were."""
+    count = 0
+    for column in INT_COLUMNS.intersection(frame.columns):
+        series = frame[column]
+        if series.dtype == "int64":
+            continue
+        outside = int(series.map(lambda v: _clamp(v) is not v).sum())
+        if outside:
+            frame[column] = series.map(_clamp)
+            count += outside
+    return frame, count
+
+
+def _warn(message: str) -> None:
+    sys.stderr.write(f"medkit-replay: warning: {message}\n")
+
+
+def write_parquet(
+    result: Result, directory: Path, *, warn: Callable[[str], None] = _warn
+) -> list[Path]:
     """Write ``<table>.parquet`` for every report table into ``directory``.
+
+    Each file goes through a temporary file renamed into place (whole or not at all). An
+    integer outside int64 (a bag time at or after 2^63 ns) is saturated to -2^63 .. 2^63-1,
+    with one warning per file saying how many cells were; the JSON report holds them exactly.
 
     Raises:
         MissingDependencyError: pyarrow is not installed.
@@ -89,8 +127,15 @@ def write_parquet(result: Result, directory: Path) -> list[Path]:
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for name, frame in result_tables(result).items():
-        table = pa.Table.from_pandas(frame, schema=arrow_schema(name), preserve_index=False)
+        safe, saturated = clamped(encodable(frame))
+        table = pa.Table.from_pandas(safe, schema=arrow_schema(name), preserve_index=False)
         path = directory / f"{name}.parquet"
-        parquet.write_table(table, path)
+        with atomic_binary(path) as stream:
+            parquet.write_table(table, stream)
+        if saturated:
+            warn(
+                f"{path}: {saturated:,} value(s) outside int64 (times at or after 2^63 ns) "
+                f"saturated to {INT64_MIN} .. {INT64_MAX}; the JSON report holds them exactly"
+            )
         written.append(path)
     return written

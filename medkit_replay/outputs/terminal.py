@@ -2,7 +2,8 @@
 
 Reads only the Result; the one place that prints. Every string that comes from a recording, a
 script or a config (codes, descriptions, sources, paths, warnings) is shown literally: it goes into
-``rich.text.Text`` objects or through ``rich.markup.escape``, never parsed as markup or emoji.
+``rich.text.Text`` objects or through ``rich.markup.escape``, never parsed as markup or emoji,
+with controls escaped (checks/text.py) and cut to a few hundred characters (the reports hold all).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from rich.padding import Padding
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
+
+from medkit_replay.checks.text import clip, printable
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -46,11 +49,18 @@ MAX_ROWS = 200
 MAX_SOURCES = 3
 MAX_DESCRIPTION = 100
 """Characters of a description shown; the reports have it whole."""
+MAX_TEXT = 200
+"""Characters of a source, a code, a cluster id shown (a valid fault code has at most 128)."""
+MAX_WARNING = 500
+"""Characters of a warning shown; the JSON report has it whole."""
+DEFAULT_WIDTH = 80
+"""Columns when ``COLUMNS`` and the terminal say nothing usable (0, negative, not a number)."""
+WIDTH_RANGE = (40, 1000)
+"""Widths outside this range (``COLUMNS=1``, ``COLUMNS=100000``) are brought back into it."""
 EPOCH_FLOOR_NS = 10**18
 """Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
 _CORRELATION_ERROR = re.compile(r"correlation config error", re.IGNORECASE)
-_UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069]")
 
 
 def severity_name(severity: int) -> str:
@@ -63,18 +73,12 @@ def correlation_disabled(warning: str) -> bool:
     return _CORRELATION_OFF.search(warning) is not None
 
 
-def _show(value: object) -> str:
-    """Recorded text made safe for a terminal: line breaks and tabs become spaces; other
-    control and bidirectional-override characters are shown as escapes (``\\x1b``), so that
-    nothing a recording holds can move the cursor, recolour or reorder the screen."""
-
-    def replace(match: re.Match[str]) -> str:
-        char = match.group()
-        if char in "\n\r\t":
-            return " "
-        return f"\\x{ord(char):02x}" if ord(char) < 0x100 else f"\\u{ord(char):04x}"
-
-    return _UNPRINTABLE.sub(replace, str(value))
+def _show(value: object, limit: int = MAX_TEXT) -> str:
+    """Recorded text made safe for a terminal (checks/text.py ``printable``: line breaks and
+    tabs become spaces, control and bidirectional characters escapes such as ``\\x1b``), so
+    nothing a recording holds can move the cursor, recolour or reorder the screen; cut at
+    ``limit`` characters with an ellipsis and the count of characters left out."""
+    return printable(clip(str(value), limit))
 
 
 def _lit(value: object, style: str = "") -> Text:
@@ -85,7 +89,7 @@ def _lit(value: object, style: str = "") -> Text:
 def _markup(template: str, **values: object) -> Text:
     """Our markup template with every value made safe and escaped, so recorded text stays
     literal (``[bold red]`` in a description prints as written)."""
-    escaped = {key: escape(_show(value)) for key, value in values.items()}
+    escaped = {key: escape(_show(value, MAX_WARNING)) for key, value in values.items()}
     return Text.from_markup(template.format(**escaped), emoji=False)
 
 
@@ -142,7 +146,11 @@ class _Clock:
 
 def _start_text(t_ns: int) -> str:
     if t_ns >= EPOCH_FLOOR_NS:
-        stamp = datetime.fromtimestamp(t_ns // 10**9, tz=UTC).strftime("%Y-%m-%d %H:%M:%S")
+        try:
+            moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
+        except (OverflowError, ValueError, OSError):  # past what a date can show (year 10000)
+            return f"t = {t_ns // 10**9:,} s"
+        stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
         return f"{stamp}.{(t_ns % 10**9) // 10**6:03d} UTC"
     return f"t = {t_ns / 1e9:.3f} s"
 
@@ -338,7 +346,7 @@ def _correlation_panel(warnings: list[str]) -> Panel:
     )
     for warning in warnings:
         body.append("\n- ")
-        body.append(_show(warning))
+        body.append(_show(warning, MAX_WARNING))
     return Panel(
         body,
         title="correlation disabled",
@@ -353,7 +361,7 @@ def _warnings(warnings: list[str]) -> Group:
     grid.add_column(no_wrap=True)
     grid.add_column(overflow="fold")
     for warning in warnings:
-        grid.add_row(Text("!", style="bold yellow"), _lit(warning))
+        grid.add_row(Text("!", style="bold yellow"), Text(_show(warning, MAX_WARNING)))
     return Group(Text(f"Warnings ({len(warnings)})", style="bold yellow"), grid)
 
 
@@ -387,8 +395,9 @@ def summary_console(
     stream: TextIO, *, width: int | None = None, force_terminal: bool | None = None
 ) -> Console:
     """A console for the summary: no markup, emoji or highlighting of plain strings, so that
-    recorded text prints as it is; terminal, colour and width detected unless given."""
-    return Console(
+    recorded text prints as it is; terminal, colour and width detected unless given (a
+    detected width that is not usable, ``COLUMNS=0``, becomes 80: see :func:`usable_width`)."""
+    console = Console(
         file=stream,
         width=width,
         force_terminal=force_terminal,
@@ -396,6 +405,17 @@ def summary_console(
         emoji=False,
         highlight=False,
     )
+    if width is None:
+        console.width = usable_width(console.width)
+    return console
+
+
+def usable_width(detected: int) -> int:
+    """A width to lay the summary out for: DEFAULT_WIDTH for 0 or less (``COLUMNS=0``), else
+    ``detected`` brought into WIDTH_RANGE (``COLUMNS=1`` would print a letter per line)."""
+    if detected <= 0:
+        return DEFAULT_WIDTH
+    return min(max(detected, WIDTH_RANGE[0]), WIDTH_RANGE[1])
 
 
 def render_summary(result: Result, width: int = 80) -> str:

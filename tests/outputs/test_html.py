@@ -264,7 +264,8 @@ def test_hostile_text_stays_text(tmp_path: Path) -> None:
     assert len(page.with_class("fault-row")) == len(result.faults) == 2
     # The escaped text reads back exactly from the JSON for the script.
     lanes = {lane["code"]: lane for lane in page.lanes()}
-    assert lanes["MOTOR_OVERHEAT"]["description"] == SEPARATORS  # the latest FAILED's
+    # The latest FAILED's; line and paragraph separators are shown as escapes.
+    assert lanes["MOTOR_OVERHEAT"]["description"] == "line\\u2028para\\u2029end"
     assert lanes["MOTOR_OVERHEAT"]["sources"] == [HOSTILE_SOURCE, HOSTILE_QUOTE]
     assert lanes["BATTERY_LOW"]["description"] == AMP + HOSTILE
     data_text = next(t for a, t in page.scripts if a.get("id") == "medkit-data")
