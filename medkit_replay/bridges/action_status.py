@@ -9,7 +9,7 @@ import enum
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
-from medkit_replay.bridges.base import FaultReporter, forward, passes_lists
+from medkit_replay.bridges.base import FaultReporter, MessageBridge, RequestList, passes_lists
 from medkit_replay.bridges.codes import action_code_prefix, action_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.parameters import INT32_MAX, ParameterReader
@@ -187,7 +187,7 @@ class _Action:
     reported: NetState | None = None
 
 
-class ActionStatusBridge:
+class ActionStatusBridge(MessageBridge):
     """Mirrors upstream node ``action_status_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §1).
 
     Every ``*/_action/status`` topic of type GoalStatusArray that passes the include/exclude lists
@@ -227,27 +227,23 @@ class ActionStatusBridge:
         action = action_name_from_status_topic(topic)
         return bool(action) and self.is_eligible(action)
 
-    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
         """Apply one status array: update the desired state, then deliver what differs."""
         action = action_name_from_status_topic(topic)
         if not action or not self.is_eligible(action):
-            return []
+            return
         state = self._actions.get(action) or self._watch(action, topic)
         goals = cast("GoalStatusArrayLike", msg).status_list
         net = derive_state(goals, self.config.canceled_is_fault)
         if net is NetState.UNKNOWN:
-            return []
+            return
         if net is NetState.FAILED:
             state.desired = NetState.FAILED
             state.desired_canceled = failure_is_cancel(goals, self.config.canceled_is_fault)
         elif self.config.heal_on_succeeded:
             # Without healing a success leaves the desired state alone: a failure stays failed.
             state.desired = NetState.HEALTHY
-        return self._reconcile(t_ns, state, action)
-
-    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
-        """:meth:`on_message`, each request handed to ``report`` (status arrays are rare)."""
-        forward(self.on_message(t_ns, topic, msg), report)
+        self._reconcile(t_ns, state, action, report)
 
     def watched_actions(self) -> list[str]:
         """Names of the actions seen so far, sorted."""
@@ -255,9 +251,9 @@ class ActionStatusBridge:
 
     def reconcile_pending(self, t_ns: int) -> list[ReportRequest]:
         """Retry every undelivered verdict, in action-name order (the retry timer's pass)."""
-        out: list[ReportRequest] = []
+        out = RequestList()
         for action in sorted(self._actions):
-            out.extend(self._reconcile(t_ns, self._actions[action], action))
+            self._reconcile(t_ns, self._actions[action], action, out)
         return out
 
     def prune(self, t_ns: int, present: Iterable[str]) -> list[ReportRequest]:
@@ -266,7 +262,7 @@ class ActionStatusBridge:
         A bag shows no graph, so nothing calls this unless the replay asks for a vanish.
         """
         keep = set(present)
-        out: list[ReportRequest] = []
+        out = RequestList()
         for action in sorted(self._actions, key=lambda name: self._actions[name].topic):
             if action in keep:
                 continue
@@ -276,7 +272,7 @@ class ActionStatusBridge:
                 and self.config.heal_on_succeeded
                 and self.service_ready
             ):
-                out.extend(self._heal(t_ns, state))
+                self._heal(t_ns, state, out)
         return out
 
     def action_state(self, action_name: str) -> ActionView | None:
@@ -299,31 +295,26 @@ class ActionStatusBridge:
         self._actions[action] = state
         return state
 
-    def _reconcile(self, t_ns: int, state: _Action, action: str) -> list[ReportRequest]:
+    def _reconcile(self, t_ns: int, state: _Action, action: str, report: ReportSink) -> None:
         desired = state.desired
         if desired is NetState.UNKNOWN or desired is (state.reported or NetState.HEALTHY):
-            return []
+            return
         if not self.service_ready:
-            return []  # stays pending; nothing is committed
+            return  # stays pending; nothing is committed
         state.reported = desired
         if desired is NetState.HEALTHY:
-            return self._heal(t_ns, state)
+            self._heal(t_ns, state, report)
+            return
         canceled = state.desired_canceled
         code = state.canceled_code if canceled else state.aborted_code
         verb = "canceled" if canceled else "aborted"
-        report = state.reporter.report(
-            t_ns, state.topic, code, self.config.aborted_severity, f"Action {action} {verb}"
+        description = f"Action {action} {verb}"
+        state.reporter.report(
+            t_ns, state.topic, code, self.config.aborted_severity, description, report
         )
-        return [] if report is None else [report]
 
-    def _heal(self, t_ns: int, state: _Action) -> list[ReportRequest]:
+    def _heal(self, t_ns: int, state: _Action, report: ReportSink) -> None:
         # Both codes are healed whichever was raised; only the one that exists matters upstream.
-        codes = [state.aborted_code]
+        state.reporter.report_passed(t_ns, state.topic, state.aborted_code, report)
         if self.config.canceled_is_fault:
-            codes.append(state.canceled_code)
-        out: list[ReportRequest] = []
-        for code in codes:
-            report = state.reporter.report_passed(t_ns, state.topic, code)
-            if report is not None:
-                out.append(report)
-        return out
+            state.reporter.report_passed(t_ns, state.topic, state.canceled_code, report)

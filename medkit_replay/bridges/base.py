@@ -17,6 +17,9 @@ if TYPE_CHECKING:
     from medkit_replay.model import Origin
 
 
+_FAILED, _PASSED = int(EventType.FAILED), int(EventType.PASSED)
+
+
 class ReportSink(Protocol):
     """Takes one forwarded ReportFault request field by field (``FaultManager.report_fields``)."""
 
@@ -52,25 +55,53 @@ class Bridge(Protocol):
         """Whether the live node would subscribe to this topic of this type."""
         ...
 
-    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
-        """Feed one message (received at bag time ``t_ns``); return what the node would send."""
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """Feed one message (received at bag time ``t_ns``); hand each request the node would
+        send to ``report``, in order."""
         ...
+
+
+class RequestList(list[ReportRequest]):
+    """A ReportSink that keeps the requests as objects, for callers that want a list."""
+
+    def __call__(
+        self,
+        t_ns: int,
+        origin: Origin,
+        topic: str | None,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+        source_id: str,
+        /,
+    ) -> None:
+        self.append(
+            ReportRequest(
+                t_ns=t_ns,
+                fault_code=fault_code,
+                event_type=event_type,
+                severity=severity,
+                description=description,
+                source_id=source_id,
+                origin=origin,
+                topic=topic,
+            )
+        )
+
+
+class MessageBridge:
+    """Base of the bridges: :meth:`on_message` as a list, over each bridge's one ``feed``."""
 
     def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
-        """:meth:`on_message` handing each request to ``report`` instead (the replay's hot path).
+        """Feed one message; each request goes to ``report``."""
+        raise NotImplementedError
 
-        Same requests in the same order; a bridge may skip building request objects.
-        """
-        ...
-
-
-def forward(requests: Iterable[ReportRequest], report: ReportSink) -> None:
-    """Hand built requests to a sink, field by field."""
-    for r in requests:
-        report(
-            r.t_ns, r.origin, r.topic, r.fault_code, r.event_type, r.severity, r.description,
-            r.source_id,
-        )  # fmt: skip
+    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
+        """Feed one message; the requests the node would send, in order."""
+        requests = RequestList()
+        self.feed(t_ns, topic, msg, requests)
+        return requests
 
 
 class FaultReporter:
@@ -92,36 +123,25 @@ class FaultReporter:
         self.local_filter = LocalFilter(filter_config)
 
     def report(
-        self, t_ns: int, topic: str, fault_code: str, severity: int, description: str
-    ) -> ReportRequest | None:
-        """A FAILED request, or None when the code is empty or the local filter holds it."""
-        if not fault_code or not self.local_filter.should_forward(fault_code, severity, t_ns):
-            return None
-        return ReportRequest(
-            t_ns=t_ns,
-            fault_code=fault_code,
-            event_type=int(EventType.FAILED),
-            severity=severity,
-            description=description,
-            source_id=self.source_id,
-            origin=self.origin,
-            topic=topic,
-        )
+        self,
+        t_ns: int,
+        topic: str,
+        fault_code: str,
+        severity: int,
+        description: str,
+        sink: ReportSink,
+    ) -> None:
+        """Send a FAILED request unless the code is empty or the local filter holds it."""
+        if fault_code and self.local_filter.should_forward(fault_code, severity, t_ns):
+            sink(
+                t_ns, self.origin, topic, fault_code, _FAILED, severity, description,
+                self.source_id,
+            )  # fmt: skip
 
-    def report_passed(self, t_ns: int, topic: str, fault_code: str) -> ReportRequest | None:
-        """A PASSED request (severity 0, no description), or None when held back."""
-        if not fault_code or not self.local_filter.should_forward_passed(fault_code, t_ns):
-            return None
-        return ReportRequest(
-            t_ns=t_ns,
-            fault_code=fault_code,
-            event_type=int(EventType.PASSED),
-            severity=0,
-            description="",
-            source_id=self.source_id,
-            origin=self.origin,
-            topic=topic,
-        )
+    def report_passed(self, t_ns: int, topic: str, fault_code: str, sink: ReportSink) -> None:
+        """Send a PASSED request (severity 0, no description) unless held back."""
+        if fault_code and self.local_filter.should_forward_passed(fault_code, t_ns):
+            sink(t_ns, self.origin, topic, fault_code, _PASSED, 0, "", self.source_id)
 
 
 class ReporterCache:

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
-from medkit_replay.bridges.base import ReporterCache, forward, resolve_topic
+from medkit_replay.bridges.base import MessageBridge, ReporterCache, resolve_topic
 from medkit_replay.bridges.codes import upper_snake
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import Severity
@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
     from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin, ReportRequest
+    from medkit_replay.model import Origin
 
 NODE_NAME = "diagnostic_bridge"
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
@@ -31,8 +31,8 @@ _MAX_PLANS = 4096
 
 Head = tuple[int, str, str, str]
 """A status as the bridge reads it without ``keyvalue_codes``: level, name, message, hardware_id."""
-Plan = tuple[str, str, "int | None", str]
-"""What a head comes to: fault code (``""``: skipped), source_id, severity (None: PASSED), text."""
+Plan = tuple[str, str, "int | None"]
+"""What a head comes to: fault code (``""``: skipped), source_id, severity (None: PASSED)."""
 
 
 class KeyValueLike(Protocol):
@@ -116,7 +116,7 @@ def is_ok_level(level: int) -> bool:
     return level == LEVEL_OK
 
 
-class DiagnosticBridge:
+class DiagnosticBridge(MessageBridge):
     """Mirrors upstream node ``diagnostic_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §2).
 
     Each DiagnosticStatus of each array, in order, is mapped to a code and a source and goes
@@ -148,51 +148,30 @@ class DiagnosticBridge:
 
         ``name_to_code`` first, then the first configured key present, then the folded name.
         """
-        mapped = self.config.name_to_code.get(status.name)
-        if mapped is not None:
-            return mapped
-        for key in self.config.keyvalue_codes:
-            for pair in status.values:
-                if pair.key == key:
-                    # Returned verbatim: an empty value skips the status, with no fallback (§2.3).
-                    return pair.value
-        if self.config.auto_generate_codes:
-            return upper_snake(status.name)
-        return ""
+        return self._code(status.name, status.values)
 
     def source_id_for(self, status: DiagnosticStatusLike) -> str:
         """The bridge's FQN, or a hardware_id holding a ``/`` when that option is on."""
-        hardware_id = status.hardware_id
-        if self.config.use_hardware_id_as_source_id and "/" in hardware_id:
-            return hardware_id
-        return self.node_fqn
-
-    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
-        """Every status of the array through its reporter, in array order."""
-        out: list[ReportRequest] = []
-        for status in cast("DiagnosticArrayLike", msg).status:
-            code = self.map_to_fault_code(status)
-            if not code:
-                continue
-            reporter = self.reporters.get(self.source_id_for(status))
-            severity = map_to_severity(status.level)
-            if severity is None:
-                report = reporter.report_passed(t_ns, topic, code)
-            else:
-                report = reporter.report(t_ns, topic, code, severity, status.message)
-            if report is not None:
-                out.append(report)
-        return out
+        return self._source(status.hardware_id)
 
     def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
-        """:meth:`on_message` for the replay's hot path: no request objects, one plan per head.
+        """Every status of the array through its reporter, in array order.
 
         Without ``keyvalue_codes`` a status's code, source and severity depend only on its
         level, name, message and hardware_id, so they are worked out once per distinct head
         (a light DiagnosticArray hands the heads over without building status objects).
         """
-        if self.config.keyvalue_codes:
-            forward(self.on_message(t_ns, topic, msg), report)
+        reporters = self.reporters
+        if self.config.keyvalue_codes:  # codes depend on the values: no plans
+            for status in cast("DiagnosticArrayLike", msg).status:
+                code = self._code(status.name, status.values)
+                if code:
+                    reporter = reporters.get(self._source(status.hardware_id))
+                    severity = map_to_severity(status.level)
+                    if severity is None:
+                        reporter.report_passed(t_ns, topic, code, report)
+                    else:
+                        reporter.report(t_ns, topic, code, severity, status.message, report)
             return
         heads: list[Head] | None = getattr(msg, "heads", None)
         if heads is None:
@@ -200,32 +179,36 @@ class DiagnosticBridge:
                 (s.level, s.name, s.message, s.hardware_id)
                 for s in cast("DiagnosticArrayLike", msg).status
             ]
-        plans, reporters, origin = self._plans, self.reporters, self.origin
+        plans = self._plans
         for head in heads:
             plan = plans.get(head)
             if plan is None:
-                plan = self._plan(head)
+                level, name, _message, hardware_id = head
+                plan = (self._code(name, ()), self._source(hardware_id), map_to_severity(level))
                 if len(plans) >= _MAX_PLANS:
                     plans.clear()
                 plans[head] = plan
-            code, source_id, severity, message = plan
-            if not code:
-                continue
-            local_filter = reporters.get(source_id).local_filter
-            if severity is None:
-                if local_filter.should_forward_passed(code, t_ns):
-                    report(t_ns, origin, topic, code, 1, 0, "", source_id)
-            elif local_filter.should_forward(code, severity, t_ns):
-                report(t_ns, origin, topic, code, 0, severity, message, source_id)
+            code, source_id, severity = plan
+            if code:
+                if severity is None:
+                    reporters.get(source_id).report_passed(t_ns, topic, code, report)
+                else:
+                    reporters.get(source_id).report(t_ns, topic, code, severity, head[2], report)
 
-    def _plan(self, head: Head) -> Plan:
-        level, name, message, hardware_id = head
-        code = self.config.name_to_code.get(name)
-        if code is None:
-            code = upper_snake(name) if self.config.auto_generate_codes else ""
-        source_id = (
-            hardware_id
-            if self.config.use_hardware_id_as_source_id and "/" in hardware_id
-            else self.node_fqn
-        )
-        return code, source_id, map_to_severity(level), message
+    def _code(self, name: str, values: Sequence[KeyValueLike]) -> str:
+        mapped = self.config.name_to_code.get(name)
+        if mapped is not None:
+            return mapped
+        for key in self.config.keyvalue_codes:
+            for pair in values:
+                if pair.key == key:
+                    # Returned verbatim: an empty value skips the status, with no fallback (§2.3).
+                    return pair.value
+        if self.config.auto_generate_codes:
+            return upper_snake(name)
+        return ""
+
+    def _source(self, hardware_id: str) -> str:
+        if self.config.use_hardware_id_as_source_id and "/" in hardware_id:
+            return hardware_id
+        return self.node_fqn

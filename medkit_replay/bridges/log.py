@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Self, cast
 
 from medkit_replay.bridges.base import (
+    MessageBridge,
     ReporterCache,
     any_substring,
-    forward,
     passes_lists,
     resolve_topic,
 )
@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from collections.abc import Mapping
 
     from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin, ReportRequest
+    from medkit_replay.model import Origin
 
 NODE_NAME = "log_bridge"
 LOG_TYPE = "rcl_interfaces/msg/Log"
@@ -129,7 +129,7 @@ def map_level_to_severity(level: int, severity_floor: int) -> int | None:
     return int(Severity.ERROR)
 
 
-class LogBridge:
+class LogBridge(MessageBridge):
     """Mirrors upstream node ``log_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §3).
 
     Each Log message at or above the floor becomes a FAILED report from the logging node, coded
@@ -179,31 +179,24 @@ class LogBridge:
         self._last_forward[key] = t_ns
         return True
 
-    def on_message(self, t_ns: int, topic: str, msg: object) -> list[ReportRequest]:
-        """One log line through upstream's pipeline (bridges.md §3.1), in its order."""
+    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+        """One log line through upstream's pipeline (bridges.md §3.1), in its order.
+
+        The level is looked at first: the checks upstream runs before it change no state, so
+        a line below the floor is dropped at once, whatever its node.
+        """
         log = cast("LogLike", msg)
-        source_id = node_source_id(log.name)
-        if source_id in (self.node_fqn, "/" + NODE_NAME):
-            return []
-        if self.config.exclude_medkit_stack and is_medkit_stack_logger(log.name):
-            return []
-        if not self.node_is_eligible(source_id):
-            return []
         severity = map_level_to_severity(log.level, self.config.severity_floor)
         if severity is None:
-            return []
+            return
+        source_id = node_source_id(log.name)
+        if source_id in (self.node_fqn, "/" + NODE_NAME):
+            return
+        if self.config.exclude_medkit_stack and is_medkit_stack_logger(log.name):
+            return
+        if not self.node_is_eligible(source_id):
+            return
         code = self.fault_code(source_id, log.msg)
         if severity >= Severity.ERROR and not self.cooldown_allows(code, severity, t_ns):
-            return []
-        report = self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg)
-        return [] if report is None else [report]
-
-    def feed(self, t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
-        """:meth:`on_message` for the replay's hot path: below the floor, nothing is looked at.
-
-        The checks before the level's in :meth:`on_message` change no state, so a line whose
-        level maps to no severity is dropped first, whatever its node.
-        """
-        level = cast("LogLike", msg).level
-        if map_level_to_severity(level, self.config.severity_floor) is not None:
-            forward(self.on_message(t_ns, topic, msg), report)
+            return
+        self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg, report)

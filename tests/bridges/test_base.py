@@ -19,7 +19,12 @@ from medkit_replay.bridges import (
     FaultReporter,
     LogBridge,
 )
-from medkit_replay.bridges.base import any_substring, passes_lists, resolve_topic
+from medkit_replay.bridges.base import (
+    RequestList,
+    any_substring,
+    passes_lists,
+    resolve_topic,
+)
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import EventType, ReportRequest
@@ -69,21 +74,27 @@ def test_bridges_do_not_import_rosbags_at_run_time() -> None:
 
 def test_reporter_drops_empty_codes_and_stamps_its_source() -> None:
     reporter = FaultReporter("/src", LocalFilterConfig(enabled=False), origin="log_bridge")
-    assert reporter.report(1, "/t", "", 2, "x") is None
-    assert reporter.report_passed(1, "/t", "") is None
-    assert reporter.report(1, "/t", "C", 1, "x") == ReportRequest(
-        t_ns=1,
-        fault_code="C",
-        event_type=EventType.FAILED,
-        severity=1,
-        description="x",
-        source_id="/src",
-        origin="log_bridge",
-        topic="/t",
-    )
-    passed = reporter.report_passed(2, "/t", "C")
-    assert passed is not None
+    sent = RequestList()
+    reporter.report(1, "/t", "", 2, "x", sent)
+    reporter.report_passed(1, "/t", "", sent)
+    assert sent == []
+    reporter.report(1, "/t", "C", 1, "x", sent)
+    assert sent == [
+        ReportRequest(
+            t_ns=1,
+            fault_code="C",
+            event_type=EventType.FAILED,
+            severity=1,
+            description="x",
+            source_id="/src",
+            origin="log_bridge",
+            topic="/t",
+        )
+    ]
+    reporter.report_passed(2, "/t", "C", sent)
+    passed = sent[-1]
     assert (passed.event_type, passed.severity, passed.description) == (EventType.PASSED, 0, "")
+    assert type(passed.event_type) is int  # plain numbers travel to the manager
 
 
 def test_reporter_filter_is_sanitised_from_its_config() -> None:
@@ -94,7 +105,9 @@ def test_reporter_filter_is_sanitised_from_its_config() -> None:
     )
     assert reporter.local_filter.config.default_threshold == 1
     assert reporter.local_filter.config.default_window_sec == 1.0
-    assert reporter.report(1, "/t", "C", 0, "") is not None
+    sent = RequestList()
+    reporter.report(1, "/t", "C", 0, "", sent)
+    assert len(sent) == 1
 
 
 @pytest.mark.parametrize(

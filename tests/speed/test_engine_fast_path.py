@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Any, Literal
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from medkit_replay.bridges.action_status import ActionStatusBridge, ActionStatusBridgeConfig
 from medkit_replay.bridges.diagnostic import DiagnosticBridge, DiagnosticBridgeConfig
 from medkit_replay.bridges.log import LogBridge, LogBridgeConfig
 from medkit_replay.config.fault_manager import fault_manager_config
@@ -34,6 +33,7 @@ from medkit_replay.model import (
 )
 from medkit_replay.spool import Spool
 from tests.inputs.builders import TS
+from tests.oracle.bridges import oracle_diagnostic, oracle_log
 from tests.oracle.manager import oracle_report
 
 if TYPE_CHECKING:
@@ -165,7 +165,7 @@ def test_report_fields_does_what_report_does(config: str, rows: str, sequence: l
                 source_id=step.source,
                 origin=origin,
                 topic="/diagnostics",
-            )
+            ),
         )
         fast.report_fields(
             t_ns,
@@ -183,7 +183,7 @@ def test_report_fields_does_what_report_does(config: str, rows: str, sequence: l
     assert state(fast) == state(reference)
 
 
-# -- bridges: feed against on_message ------------------------------------------------------
+# -- bridges: feed against the plain oracles ------------------------------------------------------
 
 
 def _new(msgtype: str, /, **fields: Any) -> Any:
@@ -243,24 +243,17 @@ class Sink:
         self.requests.append(fields)
 
 
-def as_fields(requests: list[ReportRequest]) -> list[tuple[object, ...]]:
-    return [
-        (r.t_ns, r.origin, r.topic, r.fault_code, r.event_type, r.severity, r.description,
-         r.source_id)
-        for r in requests
-    ]  # fmt: skip
-
-
 @pytest.mark.parametrize("config", list(DIAG_CONFIGS), ids=list(DIAG_CONFIGS))
 @settings(max_examples=80, suppress_health_check=[HealthCheck.too_slow], deadline=None)
 @given(arrays=st.lists(st.lists(statuses, max_size=6), max_size=30))
-def test_diagnostic_feed_does_what_on_message_does(config: str, arrays: list[list[object]]) -> None:
+def test_diagnostic_feed_does_what_the_oracle_does(config: str, arrays: list[list[object]]) -> None:
     reference = DiagnosticBridge(DIAG_CONFIGS[config])
     fast = DiagnosticBridge(DIAG_CONFIGS[config])
-    expected, sink = [], Sink()
+    expected: list[tuple[object, ...]] = []
+    sink = Sink()
     for k, array in enumerate(arrays):
         msg = _array(array)
-        expected += as_fields(reference.on_message(k * 100_000_000, "/diagnostics", msg))
+        expected += oracle_diagnostic(reference, k * 100_000_000, "/diagnostics", msg)
         fast.feed(k * 100_000_000, "/diagnostics", msg, sink)
     assert sink.requests == expected
 
@@ -288,30 +281,13 @@ logs = st.builds(
 )
 @settings(max_examples=80, suppress_health_check=[HealthCheck.too_slow], deadline=None)
 @given(messages=st.lists(logs, max_size=40))
-def test_log_feed_does_what_on_message_does(
+def test_log_feed_does_what_the_oracle_does(
     config: LogBridgeConfig, messages: list[object]
 ) -> None:
     reference, fast = LogBridge(config), LogBridge(config)
-    expected, sink = [], Sink()
+    expected: list[tuple[object, ...]] = []
+    sink = Sink()
     for k, msg in enumerate(messages):
-        expected += as_fields(reference.on_message(k * 300_000_000, "/rosout", msg))
+        expected += oracle_log(reference, k * 300_000_000, "/rosout", msg)
         fast.feed(k * 300_000_000, "/rosout", msg, sink)
-    assert sink.requests == expected
-
-
-goal_arrays = st.lists(st.sampled_from([1, 2, 4, 5, 6]), max_size=3)
-
-
-@settings(max_examples=60, deadline=None)
-@given(sequence=st.lists(st.tuples(st.sampled_from(["/a", "/b"]), goal_arrays), max_size=30))
-def test_action_feed_does_what_on_message_does(sequence: list[tuple[str, list[int]]]) -> None:
-    config = ActionStatusBridgeConfig(canceled_is_fault=True)
-    reference, fast = ActionStatusBridge(config), ActionStatusBridge(config)
-    expected, sink = [], Sink()
-    for k, (action, codes) in enumerate(sequence):
-        goals = [_new("action_msgs/msg/GoalStatus", goal_info=None, status=c) for c in codes]
-        msg = _new("action_msgs/msg/GoalStatusArray", status_list=goals)
-        topic = f"{action}/_action/status"
-        expected += as_fields(reference.on_message(k, topic, msg))
-        fast.feed(k, topic, msg, sink)
     assert sink.requests == expected
