@@ -42,83 +42,29 @@ class Merged(NamedTuple, Generic[T]):
     item: T
 
 
-def reorder(
-    stream: Iterable[Bound | Timed[T]], on_late: Callable[[Timed[T]], None], max_held: int
-) -> Iterator[Timed[T]]:
-    """Sort a stream that is in order up to what its bounds allow, holding only the overlap.
-
-    An item is held until a bound past its time shows nothing earlier can follow; ties in time
-    leave in position order. An item older than one already released (its reader's bound was
-    wrong) is passed to ``on_late`` instead of being yielded, so the output never goes back.
-
-    Args:
-        stream: items and bounds as the reader produces them.
-        on_late: called with each item that arrived after a later one was released.
-        max_held: most items held at once; past it the earliest is released without a bound,
-            so memory stays bounded even when a reader gives no bounds.
-
-    Yields:
-        The items, sorted by ``(t_ns, position)``.
-    """
-    # Items that arrive in order wait in a FIFO run (the common case, cheap); the first one
-    # out of order moves everything into a heap until the heap has drained again.
-    run: deque[Timed[T]] = deque()
-    heap: list[tuple[int, Position, int, Timed[T]]] = []
-    tiebreak = count()
-    last: tuple[int, Position] | None = None
-    for entry in stream:
-        if type(entry) is Bound or isinstance(entry, Bound):
-            # Strict: an item at exactly the bound may still be preceded by one at a lower position.
-            bound = entry.t_ns
-            if heap:
-                while heap and heap[0][0] < bound:
-                    t_ns, position, _, timed = heapq.heappop(heap)
-                    last = (t_ns, position)
-                    yield timed
-            elif run and run[0].t_ns < bound:
-                while run and run[0].t_ns < bound:
-                    timed = run.popleft()
-                    yield timed
-                last = (timed.t_ns, timed.position)
-            continue
-        t_ns, position = entry.t_ns, entry.position
-        if last is not None and (t_ns < last[0] or (t_ns == last[0] and position < last[1])):
-            on_late(entry)
-            continue
-        if not heap and (
-            not run
-            or t_ns > run[-1].t_ns
-            or (t_ns == run[-1].t_ns and position >= run[-1].position)
-        ):
-            run.append(entry)
-            if len(run) > max_held:
-                timed = run.popleft()
-                last = (timed.t_ns, timed.position)
-                yield timed
-            continue
-        for held in run:
-            heapq.heappush(heap, (held.t_ns, held.position, next(tiebreak), held))
-        run.clear()
-        heapq.heappush(heap, (t_ns, position, next(tiebreak), entry))
-        if len(heap) > max_held:
-            t_ns, position, _, timed = heapq.heappop(heap)
-            last = (t_ns, position)
-            yield timed
-    yield from run
-    while heap:
-        yield heapq.heappop(heap)[3]
-
-
 def reorder_batches(
     stream: Iterable[Bound | Timed[T] | list[Timed[T]]],
     on_late: Callable[[Timed[T]], None],
     max_held: int,
 ) -> Iterator[list[Timed[T]]]:
-    """:func:`reorder` for readers that hand over whole sorted batches: the same items, in lists.
+    """Sort a stream that is in order up to what its bounds allow, holding only the overlap.
 
-    A list in the stream is a batch of items already sorted by ``(t_ns, position)`` (a chunk's
-    messages) with no bound among them. Flattened, the output equals ``reorder`` of the
-    flattened stream; a batch that continues the items held moves through in one piece.
+    An item is held until a bound past its time shows nothing earlier can follow; ties in time
+    leave in position order. An item older than one already released (its reader's bound was
+    wrong) is passed to ``on_late`` instead of being yielded, so the output never goes back.
+    Items arriving in order wait in a FIFO run (cheap); the first one out of order moves the
+    run into a heap until the heap has drained again.
+
+    Args:
+        stream: items, bounds, and batches: a list is items already sorted by
+            ``(t_ns, position)`` (a chunk's messages) with no bound among them; a batch that
+            continues the items held moves through in one piece.
+        on_late: called with each item that arrived after a later one was released.
+        max_held: most items held at once; past it the earliest is released without a bound,
+            so memory stays bounded even when a reader gives no bounds.
+
+    Yields:
+        The items sorted by ``(t_ns, position)``, in lists.
     """
     run: deque[Timed[T]] = deque()
     heap: list[tuple[int, Position, int, Timed[T]]] = []
@@ -126,7 +72,7 @@ def reorder_batches(
     last: tuple[int, Position] | None = None
 
     def one(entry: Timed[T]) -> list[Timed[T]]:
-        """An item on its own, as reorder takes it; returns what leaves because of it."""
+        """An item on its own; returns what leaves because of it."""
         nonlocal last
         t_ns, position = entry.t_ns, entry.position
         if last is not None and (t_ns < last[0] or (t_ns == last[0] and position < last[1])):
@@ -176,6 +122,7 @@ def reorder_batches(
             if out:
                 yield out
         elif type(entry) is Bound or isinstance(entry, Bound):
+            # Strict: an item at exactly the bound may still be preceded by one at a lower position.
             bound = entry.t_ns
             if heap:
                 out = []

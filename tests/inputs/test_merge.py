@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from hypothesis import given, strategies as st
 
-from medkit_replay.inputs.merge import Bound, Merged, Timed, merge, reorder
+from medkit_replay.inputs.merge import Bound, Merged, Timed, merge, reorder_batches
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -17,7 +17,8 @@ if TYPE_CHECKING:
 
 def _run(stream: list[Bound | Timed[str]], max_held: int = 1000) -> tuple[list[str], list[str]]:
     late: list[str] = []
-    out = [t.item for t in reorder(stream, lambda t: late.append(t.item), max_held)]
+    batches = reorder_batches(stream, lambda t: late.append(t.item), max_held)
+    out = [t.item for batch in batches for t in batch]
     return out, late
 
 
