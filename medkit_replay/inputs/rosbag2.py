@@ -5,23 +5,27 @@ Chains an input's storage files, restores time order, selects topics and decodes
 
 from __future__ import annotations
 
+import os
+import posixpath
 import re
 import sys
 from dataclasses import dataclass, field
-from pathlib import Path, PurePath
+from pathlib import Path, PurePath, PurePosixPath
 from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
 import yaml
 
 from medkit_replay.errors import InputError
-from medkit_replay.inputs.db3 import Db3File
-from medkit_replay.inputs.mcap import McapFile
+from medkit_replay.files import open_regular, read_limited_text
+from medkit_replay.inputs.db3 import SQLITE_MAGIC, Db3File
+from medkit_replay.inputs.mcap import MAGIC as MCAP_MAGIC, McapFile
 from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.source import Message
-from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
+from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, TEMP_MARGIN, NotABagError, temp_room
 from medkit_replay.inputs.typestore import DecodeError, Decoder, DefinitionError, make_decoder
 from medkit_replay.model import InputSummary, TopicSummary
+from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded
 
 if sys.version_info >= (3, 14):
     from compression import zstd
@@ -64,19 +68,41 @@ def _one_line(exc: BaseException | str) -> str:
     return " ".join(str(exc).split())
 
 
+def _load_metadata(path: Path) -> object:
+    """The document in metadata.yaml: a regular file, bounded in size and in YAML nodes.
+
+    Raises:
+        OSError, UnicodeDecodeError, yaml.YAMLError, YamlBoundsError, ValueError.
+    """
+    text = read_limited_text(path)
+    try:  # libyaml's parser when present: the same documents, several times faster
+        return _bounded_load(text, _FAST_LOADER)
+    except yaml.YAMLError:
+        return _bounded_load(text, yaml.SafeLoader)  # says what is wrong as it does
+
+
+def _bounded_load(text: str, loader_class: type[yaml.SafeLoader]) -> object:
+    loader = loader_class(text)
+    try:
+        root = compose_bounded(loader.get_single_node)
+        return None if root is None else loader.construct_document(root)
+    finally:
+        loader.dispose()
+
+
 def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | None:
     """Parse metadata.yaml leniently; None (with a warning) when it is missing or unusable."""
     path = directory / "metadata.yaml"
-    if not path.is_file():
+    if not path.exists():
         return None
     try:
-        text = path.read_text(encoding="utf-8")
-        try:  # libyaml's parser when present: the same documents, several times faster
-            document = yaml.load(text, Loader=_FAST_LOADER)  # a safe loader
-        except yaml.YAMLError:
-            document = yaml.safe_load(text)  # says what is wrong as the pure parser does
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        document = _load_metadata(path)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError) as exc:
+        # ValueError: an integer of thousands of digits, refused by Python's int().
         warn(f"{path}: cannot be read ({_one_line(exc)})")
+        return None
+    except YamlBoundsError as exc:
+        warn(f"{path}: cannot be read ({exc.message})")
         return None
     info = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
     if not isinstance(info, dict):
@@ -84,25 +110,66 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
         return None
     version = info.get("version")
     if isinstance(version, int) and version > 9:
-        warn(f"{path}: metadata version {version} is newer than 9, the newest known; read as 9")
-    meta = _Metadata(storage=str(info.get("storage_identifier") or "") or None)
-    for name in info.get("relative_file_paths") or ():
+        shown = str(version) if version < 10**6 else "far"
+        warn(f"{path}: metadata version {shown} is newer than 9, the newest known; read as 9")
+    storage = info.get("storage_identifier")
+    meta = _Metadata(storage=storage if isinstance(storage, str) and storage else None)
+    names: dict[str, list[str]] = {}
+    for name in _listed(path, info, "relative_file_paths", warn):
         if isinstance(name, str):
-            meta.files.append(PurePath(name).name)  # before version 4 the bag folder is included
-    for entry in info.get("files") or ():
+            _add_file(meta, names, name)
+    entries: dict[str, list[str]] = {}
+    for entry in _listed(path, info, "files", warn):
         name = entry.get("path") if isinstance(entry, dict) else None
-        if not isinstance(name, str):
+        if not isinstance(entry, dict) or not isinstance(name, str):
             continue
-        name = PurePath(name).name
-        if name not in meta.files:
-            meta.files.append(name)
-        start = (entry.get("starting_time") or {}).get("nanoseconds_since_epoch")
-        if isinstance(start, int):
-            meta.starts[name] = start
+        base = _add_file(meta, entries, name)
+        start = entry.get("starting_time")
+        start = start.get("nanoseconds_since_epoch") if isinstance(start, dict) else None
+        if base and isinstance(start, int) and 0 <= start < 2**63:
+            meta.starts.setdefault(base, start)
+    for key, found in (("relative_file_paths", names), ("files", entries)):
+        for base, spelled in found.items():
+            if len(spelled) > 1:
+                shown = ", ".join(repr(name) for name in spelled[:5])
+                warn(f"{path}: {key} names {base} more than once ({shown}); read once")
+    outside = {name for spelled in (*names.values(), *entries.values()) for name in spelled}
+    for name in sorted(n for n in outside if _outside(n))[:5]:
+        base = PurePosixPath(name.replace("\\", "/")).name
+        warn(f"{path}: {name!r} points outside the bag folder; {base} in it is read")
     meta.compression_format = str(info.get("compression_format") or "").lower()
     mode = str(info.get("compression_mode") or "").lower()
     meta.compression_mode = "" if mode == "none" else mode
     return meta
+
+
+def _listed(
+    path: Path, info: dict[object, object], key: str, warn: Callable[[str], None]
+) -> list[object]:
+    value = info.get(key)
+    if value is None:
+        return []
+    if not isinstance(value, list):
+        warn(f"{path}: {key} is not a list; ignored")
+        return []
+    return value
+
+
+def _add_file(meta: _Metadata, seen: dict[str, list[str]], name: str) -> str | None:
+    """Add a listed file by its name alone (before version 4 the bag folder is included)."""
+    base = PurePosixPath(name.replace("\\", "/")).name
+    if base in {"", ".", ".."} or "\x00" in base:
+        return None
+    seen.setdefault(base, []).append(name)
+    if base not in meta.files:
+        meta.files.append(base)
+    return base
+
+
+def _outside(name: str) -> bool:
+    """Whether a listed path leaves the folder it is relative to."""
+    normal = posixpath.normpath(name.replace("\\", "/"))
+    return normal.startswith(("/", "../")) or normal == ".."
 
 
 def _natural_key(path: Path) -> list[int | str]:
@@ -218,23 +285,56 @@ class Rosbag2Input:
         """Stream a file-compressed storage file into a temporary directory (kept until close).
 
         Writes as it decompresses, so a file cut short still yields everything before the cut.
+        The first bytes must be the storage's magic, and the output may not pass
+        :func:`_decompressed_limit`; past it, the rest is not read (with a warning).
         """
         if self._temp is None:
             self._temp = TemporaryDirectory(prefix="medkit-replay-")
         target = Path(self._temp.name, path.name.removesuffix(".zstd"))
+        magics = self._magics(target.name)
         decompressor = zstd.ZstdDecompressor()
+        written = 0
         try:
-            with path.open("rb") as source, target.open("wb") as sink:
+            with open_regular(path) as source, target.open("wb") as sink:
+                limit = _decompressed_limit(os.fstat(source.fileno()).st_size)
+                head = b""
                 while not decompressor.eof:
                     block = source.read(1 << 20) if decompressor.needs_input else b""
                     if decompressor.needs_input and not block:
                         raise EOFError("compressed file ends before its end-of-stream marker")
-                    sink.write(decompressor.decompress(block, max_length=1 << 20))
+                    out = decompressor.decompress(block, max_length=1 << 20)
+                    if len(head) < _MAGIC_BYTES:
+                        head += out[: _MAGIC_BYTES - len(head)]
+                        if not any(m.startswith(head[: len(m)]) for m in magics):
+                            raise NotABagError(f"decompressed data is not {_kind(magics)}")
+                    if written + len(out) > limit:
+                        sink.write(out[: limit - written])
+                        self.ctx.warn(
+                            f"{path}: decompresses to more than {limit:,} bytes "
+                            f"({_LIMIT_RULE}); only the first {limit:,} are read"
+                        )
+                        break
+                    sink.write(out)
+                    written += len(out)
+            if decompressor.eof and len(head) < _MAGIC_BYTES:
+                raise NotABagError(f"decompressed data is not {_kind(magics)}")
+        except NotABagError:
+            target.unlink(missing_ok=True)
+            raise
         except (OSError, EOFError, zstd.ZstdError) as exc:
-            if not target.is_file() or not target.stat().st_size:
+            if not written:
+                target.unlink(missing_ok=True)
                 raise NotABagError(f"cannot be decompressed ({_one_line(exc)})") from None
             self.ctx.warn(f"{path}: compressed data is damaged ({_one_line(exc)}); read the rest")
         return target
+
+    def _magics(self, name: str) -> tuple[bytes, ...]:
+        """The magic numbers a decompressed storage file called ``name`` may start with."""
+        suffix = PurePath(name).suffix
+        storage = {".mcap": "mcap", ".db3": "sqlite3"}.get(suffix, self._meta.storage)
+        if storage in _MAGICS:
+            return (_MAGICS[storage],)
+        return tuple(_MAGICS.values())
 
     def _warn(self, text: str) -> None:
         text = f"{self.path}: {text}"
@@ -383,6 +483,32 @@ class Rosbag2Input:
         if self._temp is not None:
             self._temp.cleanup()
             self._temp = None
+
+
+_MAGICS = {"mcap": MCAP_MAGIC, "sqlite3": SQLITE_MAGIC}
+_MAGIC_BYTES = max(len(m) for m in _MAGICS.values())
+MAX_EXPANSION = 1000
+"""Largest ratio of a file-compressed storage file's decompressed size to its own.
+
+rosbag2's zstd leaves recorded traffic (timestamps, headers, sensor noise) well below 100:1;
+only a file of nothing but blank frames could pass this, and then its start is still read.
+"""
+MIN_DECOMPRESSED_ALLOWANCE = 64 * 1024 * 1024
+"""Output always allowed to a small compressed file, whatever its ratio."""
+_LIMIT_RULE = (
+    f"at most {MAX_EXPANSION}x its compressed size, and the temporary folder's free space "
+    f"less {TEMP_MARGIN // (1024 * 1024)} MiB"
+)
+
+
+def _decompressed_limit(compressed: int) -> int:
+    """Bytes a compressed storage file may decompress to in the temporary folder."""
+    return min(temp_room(), max(MIN_DECOMPRESSED_ALLOWANCE, compressed * MAX_EXPANSION))
+
+
+def _kind(magics: tuple[bytes, ...]) -> str:
+    names = {MCAP_MAGIC: "an MCAP file", SQLITE_MAGIC: "an SQLite database"}
+    return " or ".join(names[m] for m in magics)
 
 
 def _unzstd(data: bytes | memoryview) -> bytes:
