@@ -24,6 +24,7 @@ from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import Message, open_recording
+from medkit_replay.inputs.selection import LOG_TYPE
 from medkit_replay.model import (
     CLEAR_ROWS,
     EVENT_ROWS,
@@ -303,10 +304,23 @@ def replay(
                 "introspection); they cannot be replayed"
             )
     if messages == 0:
+        logs = sum(
+            t.messages
+            for s in summaries
+            for t in s.topics
+            if t.topic == rosout_topic and t.type == LOG_TYPE
+        )
+        off = (
+            f"; {rosout_topic} holds {logs} log message(s), which the log bridge would read, "
+            "but it is off (add a log_bridge section to the config, or set medkit_replay: "
+            "{enable_log_bridge: true})"
+            if logs and not rosout
+            else ""
+        )
         warnings.append(
             "no topic the replay reads was found (action status, "
             f"{router.diagnostic.topic}, ReportFault/ClearFault service events, fault manager "
-            "events" + (f", {rosout_topic}" if rosout else "") + "); the report is empty"
+            "events" + (f", {rosout_topic}" if rosout else "") + "); the report is empty" + off
         )
     parity: dict[str, object] | None = None
     if len(router.recorded_events):

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from tests.inputs.builders import diag, storage_file, write_bag
+from tests.inputs.builders import diag, log, set_metadata, storage_file, write_bag
 from tests.redteam.support import run_limited
 
 if TYPE_CHECKING:
@@ -173,3 +173,91 @@ def test_duplicate_topic_id_is_named_and_the_first_declared_wins(tmp_path: Path)
         "its messages cannot be told apart and are read as /diagnostics, the first declared"
     ) in warnings_of(report)
     assert messages_read(report) == 3
+
+
+# --- item 5: metadata.yaml ------------------------------------------------------------
+
+
+def mcap_bag(tmp_path: Path, count: int = 3) -> tuple[Path, Path]:
+    bag = write_bag(tmp_path / "bag", [diag((k + 1) * SECOND) for k in range(count)])
+    return bag, storage_file(bag)
+
+
+def test_a_file_listed_three_ways_is_read_once(tmp_path: Path) -> None:
+    bag, _ = mcap_bag(tmp_path)
+    names = ["bag.mcap", "./bag.mcap", "old/../bag.mcap"]
+    set_metadata(bag, relative_file_paths=names, files=[{"path": n} for n in names])
+    _, report = analyze(tmp_path, bag)
+    assert messages_read(report) == 3
+    shown = "'bag.mcap', './bag.mcap', 'old/../bag.mcap'"
+    for key in ("relative_file_paths", "files"):
+        assert (
+            f"{bag / 'metadata.yaml'}: {key} names bag.mcap more than once ({shown}); read once"
+            in warnings_of(report)
+        )
+
+
+@pytest.mark.parametrize(
+    ("changes", "warning"),
+    [
+        ({"files": [{"path": "bag.mcap", "starting_time": [1]}]}, None),
+        ({"files": [1, None, {"path": 5}], "relative_file_paths": None}, "no storage file"),
+        ({"files": 1, "relative_file_paths": "bag.mcap"}, "files is not a list; ignored"),
+        ({"relative_file_paths": ["../../elsewhere/bag.mcap"], "files": None}, "points outside"),
+        ({"storage_identifier": [1], "compression_mode": {"a": 1}}, None),
+        ({"version": int("9" * 4000)}, "metadata version far is newer than 9"),
+    ],
+)
+def test_metadata_with_wrong_types_is_read_leniently(
+    tmp_path: Path, changes: dict[str, object], warning: str | None
+) -> None:
+    bag, _ = mcap_bag(tmp_path)
+    set_metadata(bag, **changes)
+    outcome, report = analyze(tmp_path, bag)
+    assert "internal error" not in outcome.stderr
+    assert messages_read(report) == 3
+    if warning == "no storage file":
+        assert f"{bag}: bag.mcap not listed in metadata.yaml" in "\n".join(warnings_of(report))
+    elif warning is not None:
+        assert warning in "\n".join(warnings_of(report))
+
+
+def test_a_version_of_five_thousand_digits_is_a_warning(tmp_path: Path) -> None:
+    bag, _ = mcap_bag(tmp_path)
+    path = bag / "metadata.yaml"
+    path.write_text(path.read_text().replace("version: 9", "version: " + "7" * 5000))
+    _, report = analyze(tmp_path, bag)
+    assert messages_read(report) == 3
+    assert any(
+        w.startswith(f"{path}: cannot be read (") and "digits" in w for w in warnings_of(report)
+    )
+
+
+def test_metadata_alias_bomb_is_refused_with_a_warning(tmp_path: Path) -> None:
+    bag, _ = mcap_bag(tmp_path)
+    levels = ["a0: &a0 [bag.mcap, bag.mcap, bag.mcap, bag.mcap, bag.mcap, bag.mcap]"]
+    levels += [f"a{k}: &a{k} [{', '.join([f'*a{k - 1}'] * 9)}]" for k in range(1, 9)]
+    path = bag / "metadata.yaml"
+    path.write_text(
+        "\n".join(levels) + "\nrosbag2_bagfile_information:\n  relative_file_paths: *a8\n"
+    )
+    outcome, report = analyze(tmp_path, bag)
+    assert messages_read(report) == 3
+    assert f"{path}: cannot be read (the YAML expands to more than" in "\n".join(
+        warnings_of(report)
+    )
+    assert outcome.peak_rss_kib < 300 * 1024
+
+
+# --- item 9: a bag of /rosout alone -----------------------------------------------------
+
+
+def test_rosout_alone_says_the_log_bridge_would_read_it(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "bag", [log(k * SECOND) for k in range(1, 4)])
+    _, report = analyze(tmp_path, bag)
+    assert (
+        "no topic the replay reads was found (action status, /diagnostics, ReportFault/"
+        "ClearFault service events, fault manager events); the report is empty; /rosout holds "
+        "3 log message(s), which the log bridge would read, but it is off (add a log_bridge "
+        "section to the config, or set medkit_replay: {enable_log_bridge: true})"
+    ) in warnings_of(report)

@@ -42,7 +42,7 @@ def compressed(target: Path, head: bytes, zeros: int) -> Path:
     return target
 
 
-def analyze(tmp_path: Path, bag: Path, **limits: int) -> tuple[Outcome, Path]:
+def analyze(tmp_path: Path, bag: Path, file_size: int | None = None) -> tuple[Outcome, Path]:
     """Run analyze with a private, initially empty TMPDIR; return the outcome and the TMPDIR."""
     temp = tmp_path / "tmpdir"
     temp.mkdir(exist_ok=True)
@@ -51,7 +51,7 @@ def analyze(tmp_path: Path, bag: Path, **limits: int) -> tuple[Outcome, Path]:
         ["analyze", bag, "--json", report, "--quiet"],
         env={"TMPDIR": str(temp)},
         cpu_seconds=30,
-        **limits,
+        file_size=file_size,
     )
     assert "Traceback" not in outcome.stderr, outcome.stderr[-2000:]
     return outcome, temp
