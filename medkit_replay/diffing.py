@@ -96,12 +96,16 @@ MAX_ROWS = 500
 MAX_WHAT = 34
 
 JsonObject = dict[str, object]
+_INT64_MIN = -(1 << 63)
+_INT64_MAX = (1 << 63) - 1
 
 
 def tolerance_ns(seconds: float) -> int:
     """A ``--time-tolerance`` in seconds as integer nanoseconds (negative values refused)."""
     if not math.isfinite(seconds) or seconds < 0:
         raise InputError(f"time tolerance must be a number of seconds >= 0, not {seconds}")
+    if not math.isfinite(seconds * NS_PER_SEC):
+        raise InputError(f"time tolerance {seconds} s is too large to count in nanoseconds")
     return round(seconds * NS_PER_SEC)
 
 
@@ -176,7 +180,7 @@ class _Report:
         schema = report.get("schema")
         if schema != SCHEMA:
             raise InputError(
-                f"not a medkit-replay report: schema is {schema!r}, expected {SCHEMA!r}",
+                f"not a medkit-replay report: schema is {_short(schema)}, expected {SCHEMA!r}",
                 path=name,
             )
         self.faults = self._objects(report, "faults", ("fault_code",), ("fault_code",))
@@ -228,6 +232,11 @@ class _Report:
                 raise InputError(
                     f"malformed report: {key}[{number}].t_ns is not an integer", path=self.name
                 )
+            if "t_ns" in item and not _is_time(item["t_ns"]):
+                raise InputError(
+                    f"malformed report: {key}[{number}].t_ns is outside int64 nanoseconds",
+                    path=self.name,
+                )
             for name in texts + optional_texts:
                 value = item.get(name)
                 if not isinstance(value, str) and (value is not None or name in texts):
@@ -249,6 +258,19 @@ def _is_int(value: object) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
+def _short(value: object) -> str:
+    """A value for a one-line message: never the whole of a long one."""
+    text = (
+        ascii(value) if isinstance(value, str | int | float | bool | None) else type(value).__name__
+    )
+    return text if len(text) <= 80 else f"{text[:77]}..."
+
+
+def _is_time(value: object) -> bool:
+    """An int64 bag time, as every time in a report is."""
+    return _is_int(value) and _INT64_MIN <= value <= _INT64_MAX  # type: ignore[operator]
+
+
 def _event_code(event: Mapping[str, object]) -> str:
     fault = event["fault"]
     assert isinstance(fault, Mapping)
@@ -261,11 +283,11 @@ def _origin(report: Mapping[str, object]) -> int | None:
     inputs = report.get("inputs")
     if isinstance(inputs, list):
         starts += [
-            i["start_ns"] for i in inputs if isinstance(i, Mapping) and _is_int(i.get("start_ns"))
+            i["start_ns"] for i in inputs if isinstance(i, Mapping) and _is_time(i.get("start_ns"))
         ]
     summary = report.get("summary")
     start = summary.get("start_ns") if isinstance(summary, Mapping) else None
-    if isinstance(start, int) and _is_int(start):
+    if isinstance(start, int) and _is_time(start):
         starts.append(start)
     return min(starts, default=None)
 

@@ -8,16 +8,32 @@ record while it is held in memory, as an appended record does.
 
 from __future__ import annotations
 
+import errno
 import pickle
 import tempfile
 from bisect import bisect_right
 from collections.abc import Callable, Iterator, Sequence
 from typing import IO, Generic, Protocol, TypeVar, overload
 
+from medkit_replay.errors import MedkitReplayError
+
 T = TypeVar("T")
 DEFAULT_CHUNK = 16384
 
 Row = tuple[object, ...]
+
+
+class SpoolError(MedkitReplayError):
+    """The temporary file could not be written (a full disk, a file size limit): exit 2."""
+
+    def __init__(self, err: OSError) -> None:
+        cause = err.strerror or str(err)
+        if err.errno is not None and err.errno in errno.errorcode:
+            cause = f"{cause} ({errno.errorcode[err.errno]})"
+        super().__init__(
+            f"cannot spool records to the temporary directory {tempfile.gettempdir()}: {cause}; "
+            "free space there or set TMPDIR to a directory with room"
+        )
 
 
 class RowCodec(Protocol[T]):
@@ -78,17 +94,23 @@ class Spool(Sequence[T], Generic[T]):
             self._spill()
 
     def _spill(self) -> None:
-        if self._file is None:
-            self._file = tempfile.TemporaryFile(prefix="medkit-replay-")  # noqa: SIM115  # closed in close()
         tail = self._tail
         if self._codec is not None:
             encode = self._codec.encode
             tail = [x if type(x) is tuple else encode(x) for x in tail]  # type: ignore[arg-type]
         data = pickle.dumps(tail, protocol=pickle.HIGHEST_PROTOCOL)
-        self._file.seek(0, 2)
-        self._chunks.append((self._file.tell(), len(data)))
+        try:
+            if self._file is None:
+                self._file = tempfile.TemporaryFile(prefix="medkit-replay-")  # noqa: SIM115  # closed in close()
+            self._file.seek(0, 2)
+            offset = self._file.tell()
+            self._file.write(data)
+            self._file.flush()  # a full disk shows here, not at some later read
+        except OSError as err:
+            self.close()
+            raise SpoolError(err) from None
+        self._chunks.append((offset, len(data)))
         self._starts.append(self._spilled)
-        self._file.write(data)
         self._spilled += len(self._tail)
         self._tail.clear()  # in place: row_sink() hands out its append
 

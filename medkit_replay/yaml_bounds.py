@@ -115,7 +115,11 @@ def describe_yaml_error(
     line: int | None = None
     if isinstance(error, MarkedYAMLError):
         mark = error.problem_mark or error.context_mark
-        problem = error.problem or error.context or "invalid YAML"
+        # PyYAML splits one sentence in two: "expected a single document in the stream" /
+        # "but found another document"; "found duplicate anchor 'x'; first occurrence" /
+        # "second occurrence". Each half alone says too little.
+        parts = [part for part in (error.context, error.problem) if part]
+        problem = ", ".join(parts) if parts else "invalid YAML"
         line = None if mark is None else mark.line + 1
     elif isinstance(error, ReaderError):
         character = error.character
@@ -127,7 +131,34 @@ def describe_yaml_error(
             line = text.count(b"\n", 0, error.position) + 1
     else:
         problem = str(error)
-    return " ".join(part.strip() for part in str(problem).splitlines() if part.strip()), line
+    return shown_text(" ".join(str(problem).split()), limit=300), line
+
+
+# Line and paragraph separators, and the bidirectional marks, embeddings and isolates.
+_ESCAPED = frozenset(
+    (0x2028, 0x2029, 0x200E, 0x200F, *range(0x202A, 0x202F), *range(0x2066, 0x206A))
+)
+
+
+def shown_text(text: str, *, limit: int = 80) -> str:
+    """Text from a file for a one-line message: control, line-break and bidirectional
+    characters escaped, and cut short past ``limit`` characters."""
+    out: list[str] = []
+    size = 0
+    for char in text:
+        point = ord(char)
+        if point < 0x20 or 0x7F <= point <= 0x9F:
+            piece = f"\\x{point:02x}"
+        elif point in _ESCAPED or 0xD800 <= point <= 0xDFFF:
+            piece = f"\\u{point:04x}"
+        else:
+            piece = char
+        if size + len(piece) > limit:
+            out.append("...")
+            break
+        out.append(piece)
+        size += len(piece)
+    return "".join(out)
 
 
 def compose_bounded_at(reader: Reader, compose: Callable[[], Node | None]) -> Node | None:

@@ -20,7 +20,12 @@ from yaml.constructor import ConstructorError, SafeConstructor
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
 from medkit_replay.wildcards import Wildcard, compile_wildcard
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
+from medkit_replay.yaml_bounds import (
+    YamlBoundsError,
+    compose_bounded_at,
+    describe_yaml_error,
+    shown_text,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
@@ -59,6 +64,7 @@ _NULL = "tag:yaml.org,2002:null"
 _T = TypeVar("_T")
 _MAX_SHOWN = 3
 _SHOWN = 40
+_COUNT_MAX = (1 << 63) - 1
 """Patterns named in a default rule name before "+N more"."""
 
 
@@ -317,6 +323,8 @@ class _Reader:
         assert isinstance(value, int)
         if value < 0:
             raise self.fail(node, f"{where}: must be 0 or more, found {_text(node)}")
+        if value > _COUNT_MAX:  # no count reaches it, and a longer number cannot be shown
+            raise self.fail(node, f"{where}: {_text(node)} is larger than {_COUNT_MAX}")
         return value
 
     def seconds(self, node: yaml.Node, where: str) -> float:
@@ -346,9 +354,11 @@ class _Reader:
         for key_node, value_node in node.value:
             key = self.string(key_node, f"{where}: key")
             if key in seen:
-                raise self.fail(key_node, f"{where}: duplicate key '{key}'")
+                raise self.fail(key_node, f"{where}: duplicate key '{shown_text(key)}'")
             if allowed is not None and key not in allowed:
-                raise self.fail(key_node, f"{where}: unknown key '{key}'{_suggest(key, allowed)}")
+                raise self.fail(
+                    key_node, f"{where}: unknown key '{shown_text(key)}'{_suggest(key, allowed)}"
+                )
             seen.add(key)
             items.append((key, key_node, value_node))
         return items
@@ -369,8 +379,7 @@ class _Reader:
 
 def _text(node: yaml.Node) -> str:
     """A scalar's text for a message, cut short when long."""
-    text = str(node.value)
-    return text if len(text) <= _SHOWN else f"{text[: _SHOWN - 3]}..."
+    return shown_text(str(node.value), limit=_SHOWN)
 
 
 def _kind(node: yaml.Node) -> str:
@@ -381,7 +390,8 @@ def _kind(node: yaml.Node) -> str:
     names = {_INT: "a whole number", _FLOAT: "a number", _STR: "a string", _BOOL: "a boolean"}
     if node.tag == _NULL:
         return "nothing (null)"
-    shown = repr(node.value) if node.tag == _STR else str(node.value)  # as written
+    text = shown_text(str(node.value), limit=_SHOWN)
+    shown = f"'{text}'" if node.tag == _STR else text  # as written
     return f"{names.get(node.tag, 'a value')} ({shown})"
 
 
@@ -414,7 +424,7 @@ def _limits(
     for key, key_node, value_node in items:
         if not key:
             raise reader.fail(key_node, f"{where}: a fault-code pattern must not be empty")
-        limits.append((Pattern.of(key), value(value_node, f"{where}.{key}")))
+        limits.append((Pattern.of(key), value(value_node, f"{where}.{shown_text(key)}")))
     return tuple(limits)
 
 
@@ -556,7 +566,8 @@ def _unique_names(reader: _Reader, parsed: list[tuple[Rule, bool]]) -> tuple[Rul
             if rule.name in given:
                 first = given[rule.name]
                 raise ConfigError(
-                    f"rule {rule.index}: name '{rule.name}' is already used by rule {first.index}",
+                    f"rule {rule.index}: name '{shown_text(rule.name)}' is already used by "
+                    f"rule {first.index}",
                     path=reader.path,
                     line=rule.line,
                 )

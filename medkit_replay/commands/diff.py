@@ -6,10 +6,12 @@ its human and JSON output, rewrites the baseline on ``--update``.
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
+import shutil
 import sys
-import tempfile
 from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
@@ -21,6 +23,9 @@ from rich.text import Text
 from medkit_replay.commands import config_option
 from medkit_replay.diffing import diff_renderable, diff_reports, tolerance_ns
 from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.files import MAX_REPORT_FILE_BYTES, FileRefusedError, open_regular
+from medkit_replay.inputs.jsonl import JsonRefusedError, loads_strict, locate_refusal
+from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.outputs.json_report import to_report, write_json
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.pipeline import replay
@@ -36,23 +41,85 @@ def is_report_path(path: Path) -> bool:
 
 
 def read_report(path: Path) -> dict[str, object]:
-    """A JSON report from a file (checked by the diff, which names the file when it is not one)."""
+    """A JSON report from a file (checked by the diff, which names the file when it is not one).
+
+    Strict and bounded: a regular file of at most MAX_REPORT_FILE_BYTES, UTF-8, strict JSON
+    (no NaN or Infinity, no number too long, no lone surrogate); each refusal is one line.
+    """
+    shown = str(path)
+    data = _report_bytes(path)
     try:
-        with path.open(encoding="utf-8") as stream:
-            report = json.load(stream)
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise InputError(
+            f"not a JSON report (not UTF-8 text at byte {err.start:,})",
+            path=shown,
+            line=data.count(b"\n", 0, err.start) + 1,
+        ) from None
+    except MemoryError:
+        raise InputError(_TOO_BIG.format(len(data)), path=shown) from None
+    del data
+    try:
+        report = loads_strict(text)
+    except json.JSONDecodeError as err:
+        raise InputError(f"not valid JSON: {err.msg}", path=shown, line=err.lineno) from None
+    except JsonRefusedError as err:
+        where, problem = locate_refusal(text, sys.get_int_max_str_digits())
+        raise InputError(f"not valid JSON: {problem or err}", path=shown, line=where) from None
+    except MemoryError:
+        raise InputError(_TOO_BIG.format(len(text)), path=shown) from None
+    if not isinstance(report, dict):
+        raise InputError("not a medkit-replay report (not a JSON object)", path=shown)
+    if _MAYBE_SURROGATE.search(text) is not None:
+        where, problem = locate_refusal(text, sys.get_int_max_str_digits())
+        if problem is not None:
+            raise InputError(f"not valid text: {problem}", path=shown, line=where)
+    return report
+
+
+_TOO_BIG = "a report of {:,} bytes is too large to load in the memory available"
+_MAYBE_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
+
+
+def _report_bytes(path: Path) -> bytes:
+    """The file's bytes: a regular file within the bound, refused at once when it cannot be
+    a report (it does not start with '{'), so a huge or endless file is never read whole."""
+    try:
+        with open_regular(path) as stream:
+            size = os.fstat(stream.fileno()).st_size
+            if size > MAX_REPORT_FILE_BYTES:
+                raise InputError(
+                    f"a report of {size:,} bytes is larger than {MAX_REPORT_FILE_BYTES:,} bytes",
+                    path=str(path),
+                )
+            head = stream.read(_HEAD_BYTES)
+            if head.lstrip(b" \t\r\n")[:1] not in (b"{", b""):
+                raise InputError(
+                    "not a JSON report (it does not start with '{')", path=str(path), line=1
+                )
+            try:
+                # read(n) allocates n bytes first: ask for what the file holds, plus one byte
+                # to notice a file that grew past the bound.
+                wanted = min(size, MAX_REPORT_FILE_BYTES) + 1 - len(head)
+                data = head + stream.read(max(wanted, 1))
+            except MemoryError:
+                raise InputError(_TOO_BIG.format(size), path=str(path)) from None
+            if len(data) > MAX_REPORT_FILE_BYTES:  # it grew while being read
+                raise InputError(
+                    f"a report larger than {MAX_REPORT_FILE_BYTES:,} bytes", path=str(path)
+                )
+            return data
     except FileNotFoundError:
         raise InputError("no such report", path=str(path)) from None
     except IsADirectoryError:
         raise InputError("is a directory, not a JSON report", path=str(path)) from None
+    except FileRefusedError as err:
+        raise InputError(f"cannot read report: {err}", path=str(path)) from None
     except OSError as err:
         raise InputError(f"cannot read report: {err.strerror}", path=str(path)) from None
-    except UnicodeDecodeError:
-        raise InputError("not a JSON report (not UTF-8 text)", path=str(path)) from None
-    except json.JSONDecodeError as err:
-        raise InputError(f"not valid JSON: {err.msg}", path=str(path), line=err.lineno) from None
-    if not isinstance(report, dict):
-        raise InputError("not a medkit-replay report (not a JSON object)", path=str(path))
-    return report
+
+
+_HEAD_BYTES = 64 * 1024
 
 
 class _Side:
@@ -75,25 +142,23 @@ class _Side:
 
 
 def _write_baseline(baseline: Path, current: _Side) -> None:
-    """Replace the baseline with the current report, atomically (a crash leaves the old one)."""
-    directory = baseline.parent
+    """Replace the baseline with the current report, atomically (a crash leaves the old one);
+    the baseline keeps its permission bits."""
     try:
-        handle, temporary = tempfile.mkstemp(
-            prefix=f".{baseline.name}.", suffix=".tmp", dir=directory
-        )
-        try:
-            with os.fdopen(handle, "w", encoding="utf-8", newline="\n") as stream:
-                if current.result is not None:
+        with atomic_binary(baseline) as raw:
+            if current.result is not None:
+                stream = io.TextIOWrapper(raw, encoding="utf-8", newline="\n")
+                try:
                     write_json(current.result, stream)
-                else:  # a report file: its bytes as they are
-                    stream.write(current.path.read_text(encoding="utf-8"))
-            Path(temporary).replace(baseline)
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
+                    stream.flush()
+                finally:
+                    stream.detach()
+            else:  # a report file: its bytes as they are
+                with open_regular(current.path) as source:
+                    shutil.copyfileobj(source, raw)
     except OSError as err:
         raise MedkitReplayError(
-            f"cannot update the baseline: {err.strerror}", path=str(baseline)
+            f"cannot update the baseline: {err.strerror or err}", path=str(baseline)
         ) from None
 
 

@@ -47,6 +47,16 @@ def _int32(reader: ParameterReader, name: str, value: int, default: int) -> int:
     return wrapped
 
 
+def _auto_confirm_ns(seconds: float) -> int:
+    """The window in nanoseconds; a positive one below half a nanosecond stays on.
+
+    Upstream switches the check on for any value > 0 and compares ages (whole nanoseconds)
+    with ``seconds * 1e9``: a fault aged 1 ns or more is due, as with a 1 ns window here.
+    """
+    window = round(seconds * NS_PER_SEC)
+    return max(window, 1) if seconds > 0 else window
+
+
 def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     warnings = reader.warnings
@@ -132,7 +142,7 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
     cleanup_ms = max(int(cleanup_sec * 1000), 1)
     config = FaultManagerConfig(
         debounce=debounce,
-        auto_confirm_after_ns=round(auto_sec * NS_PER_SEC),
+        auto_confirm_after_ns=_auto_confirm_ns(auto_sec),
         near_miss_bound=near_miss,
         entity_overrides=tuple(overrides),
         correlation=correlation,

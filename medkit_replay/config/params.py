@@ -14,7 +14,12 @@ import yaml
 
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
+from medkit_replay.yaml_bounds import (
+    YamlBoundsError,
+    compose_bounded_at,
+    describe_yaml_error,
+    shown_text,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -50,7 +55,7 @@ class Param:
 
     def error(self, name: str, problem: str) -> ConfigError:
         """A ConfigError pointing at this parameter's file and line."""
-        return ConfigError(f"{name}: {problem}", path=str(self.path), line=self.line)
+        return ConfigError(f"{shown_text(name)}: {problem}", path=str(self.path), line=self.line)
 
 
 NodeParams = dict[str, Param]
@@ -96,20 +101,23 @@ def _value(node: yaml.Node, path: Path, name: str) -> ParamValue:
         items: list[bool | int | float | str] = []
         for item in node.value:
             if not isinstance(item, yaml.ScalarNode):
-                msg = f"{name}: arrays of maps or arrays are not ROS 2 parameters"
+                msg = f"{shown_text(name)}: arrays of maps or arrays are not ROS 2 parameters"
                 raise ConfigError(msg, path=str(path), line=item.start_mark.line + 1)
             value = _scalar(item)
             if value is None:
                 raise ConfigError(
-                    f"{name}: null inside an array", path=str(path), line=item.start_mark.line + 1
+                    f"{shown_text(name)}: null inside an array",
+                    path=str(path),
+                    line=item.start_mark.line + 1,
                 )
             items.append(value)
         kinds = {type(v) for v in items}
         if len(kinds) > 1:
-            msg = f"{name}: array mixes {', '.join(sorted(k.__name__ for k in kinds))} values"
+            mixed = ", ".join(sorted(k.__name__ for k in kinds))
+            msg = f"{shown_text(name)}: array mixes {mixed} values"
             raise ConfigError(msg, path=str(path), line=node.start_mark.line + 1)
         return items  # type: ignore[return-value]  # homogeneous, checked above
-    msg = f"{name}: unexpected YAML node"
+    msg = f"{shown_text(name)}: unexpected YAML node"
     raise ConfigError(msg, path=str(path), line=node.start_mark.line + 1)
 
 
@@ -154,7 +162,8 @@ def _collect(
         elif isinstance(value_node, yaml.MappingNode):
             _collect(value_node, path, [*keys, key], found)
         else:
-            msg = f"{'/'.join([*keys, key])}: expected a node name holding ros__parameters"
+            where = shown_text("/".join([*keys, key]))
+            msg = f"{where}: expected a node name holding ros__parameters"
             raise ConfigError(msg, path=str(path), line=key_node.start_mark.line + 1)
 
 
@@ -195,7 +204,7 @@ def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
         if isinstance(params_node, yaml.MappingNode):
             _flatten(params_node, path, "", params)
         elif not (isinstance(params_node, yaml.ScalarNode) and params_node.value in _NULL):
-            msg = f"{node_key}: ros__parameters must be a map"
+            msg = f"{shown_text(node_key)}: ros__parameters must be a map"
             raise ConfigError(msg, path=str(path), line=params_node.start_mark.line + 1)
         result.append((node_key, params))
     return result

@@ -1,15 +1,21 @@
 """JSON-lines scripts (cli-and-report.md §4): ReportFault and ClearFault requests with bag times.
 
-Parses and checks every line; a bad line is an InputError naming the file and line.
+Parses and checks every line with a strict JSON reader; a bad line is an InputError naming the
+file and line.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import re
+import sys
+import traceback
 from dataclasses import dataclass
 from typing import IO, TYPE_CHECKING
 
 from medkit_replay.errors import InputError
+from medkit_replay.files import FileRefusedError, open_regular
 from medkit_replay.model import ClearRequest, ReportRequest
 
 if TYPE_CHECKING:
@@ -17,10 +23,152 @@ if TYPE_CHECKING:
     from pathlib import Path
 
 MAX_LINE_BYTES = 1 << 20
+# A script's numbers are int64 times and uint8 fields; a report's are int64 at most.
+MAX_JSON_DIGITS = 40
+T_NS_LIMIT = 1 << 63
+_SHOWN = 60
+# Reports nest about six levels, script lines two; the parser itself needs a few frames.
+MAX_JSON_DEPTH = 64
+# (two more with the object hook of a script line).
+_PARSER_FRAMES = 5
 _EVENT_TYPES = {"FAILED": 0, "PASSED": 1}
 _REPORT_KEYS = {"t_ns", "op", "fault_code", "event_type", "severity", "description", "source_id"}
 _CLEAR_KEYS = {"t_ns", "op", "fault_code", "skip_correlation_auto_clear"}
 _UINT8_MAX = 255
+
+
+class JsonRefusedError(ValueError):
+    """JSON the strict reader refuses: NaN or Infinity, a number too long or out of the double
+    range, a repeated key, nesting too deep for the parser, a lone surrogate."""
+
+
+def _refuse_constant(name: str) -> object:
+    raise JsonRefusedError(f"{name} is not JSON")
+
+
+def _bounded_int(text: str) -> int:
+    digits = len(text) - text.startswith("-")
+    if digits > MAX_JSON_DIGITS:
+        raise JsonRefusedError(f"a number of {digits:,} digits is too long")
+    return int(text)
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise JsonRefusedError(f"the number {shown(text)} is out of the double range")
+    return value
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    result = dict(pairs)
+    if len(result) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise JsonRefusedError(f"the key {shown(key)} appears twice in one object")
+            seen.add(key)
+    return result
+
+
+def _stack_depth() -> int:
+    return sum(1 for _ in traceback.walk_stack(None))
+
+
+def loads_strict(text: str, *, small: bool = False) -> object:
+    """``json.loads`` that refuses what is not strict JSON or cannot be held safely.
+
+    ``small`` (a script line) also refuses numbers past MAX_JSON_DIGITS digits and repeated
+    keys, through per-value hooks too slow for a whole report; a report's numbers are bounded
+    by Python's own limit on long integers instead, and its floats are always checked.
+
+    Raises:
+        json.JSONDecodeError: not JSON at all (with its position).
+        JsonRefusedError: NaN/Infinity, a number too long or past the double range, nesting
+            deeper than MAX_JSON_DEPTH, a repeated key (``small``).
+    """
+    # The parser counts its nesting against the interpreter's recursion limit: lowered for
+    # the call, it refuses deep nesting at a fixed depth, cheaply, wherever it is called from.
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(min(limit, _stack_depth() + MAX_JSON_DEPTH + _PARSER_FRAMES + 2 * small))
+    try:
+        return json.loads(
+            text,
+            parse_constant=_refuse_constant,
+            parse_int=_bounded_int if small else None,
+            parse_float=_finite_float,
+            object_pairs_hook=_unique_keys if small else None,
+        )
+    except RecursionError:
+        raise JsonRefusedError(f"the JSON nests deeper than {MAX_JSON_DEPTH} levels") from None
+    except ValueError as err:
+        if isinstance(err, json.JSONDecodeError | JsonRefusedError):
+            raise
+        # int() refuses more than sys.get_int_max_str_digits() digits.
+        raise JsonRefusedError("a number is too long") from None
+    finally:
+        sys.setrecursionlimit(limit)
+
+
+def unicode_problem(text: str) -> str | None:
+    """What makes a decoded JSON string unfit for UTF-8 output (a lone surrogate), or None."""
+    if text.isascii():
+        return None
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as err:
+        return f"a lone surrogate \\u{ord(text[err.start]):04x} is not a Unicode character"
+    return None
+
+
+# Tokens outside strings that the strict reader can refuse, and strings (skipped whole).
+_TOKEN = re.compile(
+    r'"[^"\\]*(?:\\.[^"\\]*)*"|[\[{]|[\]}]|-?(?:NaN|Infinity)|-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?'
+)
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
+
+
+def locate_refusal(text: str, max_digits: int = MAX_JSON_DIGITS) -> tuple[int | None, str | None]:
+    """The line of the first thing in a parsed-or-refused JSON text the strict reader refuses,
+    and what it is; (None, None) when there is none.
+
+    For error messages only: walks the text token by token, so it runs once a refusal is
+    known (or a lone surrogate is suspected), never on the way of a valid document.
+    """
+    depth = 0
+    for match in _TOKEN.finditer(text):
+        token = match.group()
+        problem: str | None = None
+        first = token[0]
+        if first == '"':
+            if _SURROGATE_ESCAPE.search(token) is not None:
+                problem = unicode_problem(str(json.loads(token)))
+        elif first in "[{":
+            depth += 1
+            if depth > MAX_JSON_DEPTH:
+                problem = f"the JSON nests deeper than {MAX_JSON_DEPTH} levels"
+        elif first in "]}":
+            depth -= 1
+        elif token.lstrip("-")[:1] in ("N", "I"):
+            problem = f"{token} is not JSON"
+        elif token.strip("-0123456789"):
+            if not math.isfinite(float(token)):
+                problem = f"the number {shown(token)} is out of the double range"
+        elif len(token.lstrip("-")) > max_digits:
+            problem = f"a number of {len(token.lstrip('-')):,} digits is too long"
+        if problem is not None:
+            return text.count("\n", 0, match.start()) + 1, problem
+    return None, None
+
+
+def shown(value: object) -> str:
+    """A value for a message: short, one line, never the whole of a hostile value."""
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, list):
+        return "a list"
+    text = ascii(value)
+    return text if len(text) <= _SHOWN else f"{text[: _SHOWN - 3]}..."
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,10 +191,20 @@ def _int_field(
     if value is None:
         raise InputError(f"missing {key!r}", path=where[0], line=where[1])
     if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"{key!r} must be an integer, got {value!r}", path=where[0], line=where[1])
+        raise InputError(
+            f"{key!r} must be an integer, got {shown(value)}", path=where[0], line=where[1]
+        )
+    if maximum is None and value >= T_NS_LIMIT:
+        raise InputError(
+            f"{key!r} must be below 2^63 (int64 nanoseconds), got {shown(value)}",
+            path=where[0],
+            line=where[1],
+        )
     if value < 0 or (maximum is not None and value > maximum):
         bound = f"0..{maximum}" if maximum is not None else ">= 0"
-        raise InputError(f"{key!r} must be in {bound}, got {value}", path=where[0], line=where[1])
+        raise InputError(
+            f"{key!r} must be in {bound}, got {shown(value)}", path=where[0], line=where[1]
+        )
     return value
 
 
@@ -57,7 +215,12 @@ def _str_field(
     if value is None:
         raise InputError(f"missing {key!r}", path=where[0], line=where[1])
     if not isinstance(value, str):
-        raise InputError(f"{key!r} must be a string, got {value!r}", path=where[0], line=where[1])
+        raise InputError(
+            f"{key!r} must be a string, got {shown(value)}", path=where[0], line=where[1]
+        )
+    problem = unicode_problem(value)
+    if problem is not None:
+        raise InputError(f"{key!r}: {problem}", path=where[0], line=where[1])
     return value
 
 
@@ -70,13 +233,13 @@ def parse_line(obj: dict[str, object], where: tuple[str, int]) -> ReportRequest 
         unknown = sorted(set(obj) - _REPORT_KEYS)
         if unknown:
             raise InputError(
-                f"unknown key(s) {unknown} for op 'report'", path=where[0], line=where[1]
+                f"unknown key(s) {_keys(unknown)} for op 'report'", path=where[0], line=where[1]
             )
         raw_event = obj.get("event_type")
         if isinstance(raw_event, str):
             if raw_event not in _EVENT_TYPES:
                 raise InputError(
-                    f"'event_type' must be FAILED, PASSED or 0..255, got {raw_event!r}",
+                    f"'event_type' must be FAILED, PASSED or 0..255, got {shown(raw_event)}",
                     path=where[0],
                     line=where[1],
                 )
@@ -96,12 +259,12 @@ def parse_line(obj: dict[str, object], where: tuple[str, int]) -> ReportRequest 
         unknown = sorted(set(obj) - _CLEAR_KEYS)
         if unknown:
             raise InputError(
-                f"unknown key(s) {unknown} for op 'clear'", path=where[0], line=where[1]
+                f"unknown key(s) {_keys(unknown)} for op 'clear'", path=where[0], line=where[1]
             )
         skip = obj.get("skip_correlation_auto_clear", False)
         if not isinstance(skip, bool):
             raise InputError(
-                f"'skip_correlation_auto_clear' must be true or false, got {skip!r}",
+                f"'skip_correlation_auto_clear' must be true or false, got {shown(skip)}",
                 path=where[0],
                 line=where[1],
             )
@@ -109,8 +272,14 @@ def parse_line(obj: dict[str, object], where: tuple[str, int]) -> ReportRequest 
             t_ns=t_ns, fault_code=code, skip_correlation_auto_clear=skip, origin="script"
         )
     raise InputError(
-        f"unknown op {op!r} (expected 'report' or 'clear')", path=where[0], line=where[1]
+        f"unknown op {shown(op)} (expected 'report' or 'clear')", path=where[0], line=where[1]
     )
+
+
+def _keys(keys: list[str]) -> str:
+    """Unknown keys for a message: the first few, each cut short."""
+    listed = ", ".join(shown(key) for key in keys[:5])
+    return f"[{listed}{', ...' if len(keys) > 5 else ''}]"
 
 
 def iter_script(stream: IO[bytes], path: str) -> Iterator[ScriptLine]:
@@ -126,11 +295,13 @@ def iter_script(stream: IO[bytes], path: str) -> Iterator[ScriptLine]:
         if not text or text.startswith("#"):
             continue
         try:
-            obj = json.loads(text)
+            obj = loads_strict(text, small=True)
         except json.JSONDecodeError as err:
             raise InputError(
                 f"invalid JSON: {err.msg} (column {err.colno})", path=path, line=number
             ) from None
+        except JsonRefusedError as err:
+            raise InputError(f"invalid JSON: {err}", path=path, line=number) from None
         if not isinstance(obj, dict):
             raise InputError("expected a JSON object", path=path, line=number)
         request = parse_line(obj, (path, number))
@@ -148,7 +319,9 @@ def iter_script(stream: IO[bytes], path: str) -> Iterator[ScriptLine]:
 def open_script(path: Path) -> Iterator[ScriptLine]:
     """Read a script file lazily, read-only."""
     try:
-        stream = path.open("rb")
+        stream = open_regular(path)
+    except FileRefusedError as err:
+        raise InputError(f"cannot open script: {err}", path=str(path)) from None
     except OSError as err:
         raise InputError(f"cannot open script: {err.strerror}", path=str(path)) from None
     with stream:
