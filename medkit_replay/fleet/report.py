@@ -35,7 +35,7 @@ from rich.text import Text
 
 from medkit_replay.fleet.stats import codes_table, overview, runs_table
 from medkit_replay.outputs.atomic import write_bytes_atomic
-from medkit_replay.outputs.csv_safety import neutralised
+from medkit_replay.outputs.csv_safety import write_frame
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -91,9 +91,9 @@ def _csv_frame(frame: pd.DataFrame) -> pd.DataFrame:
 def to_csv(frame: pd.DataFrame) -> str:
     """A fleet table as CSV text (list columns joined, missing values empty, text cells a
     spreadsheet would run as formulas neutralised: see outputs/csv_safety.py)."""
-    text = neutralised(_csv_frame(frame)).to_csv(index=False, lineterminator="\n")
-    assert isinstance(text, str)
-    return text
+    buffer = io.StringIO()
+    write_frame(_csv_frame(frame), buffer)
+    return buffer.getvalue()
 
 
 def to_json(frame: pd.DataFrame) -> str:

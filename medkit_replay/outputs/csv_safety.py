@@ -6,7 +6,7 @@ neutralised; numbers, booleans and missing values stay as they are. JSON and Par
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Literal
 
 from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
@@ -28,12 +28,36 @@ def neutralise(value: object) -> object:
     return value
 
 
+def _text_columns(frame: pd.DataFrame) -> list[str]:
+    return [
+        column
+        for column in frame.columns
+        if not (is_numeric_dtype(frame[column].dtype) or is_bool_dtype(frame[column].dtype))
+    ]
+
+
 def neutralised(frame: pd.DataFrame) -> pd.DataFrame:
     """A copy of ``frame`` whose text cells went through :func:`neutralise`; numeric and
     boolean columns are left as they are (a mixed column is looked at cell by cell)."""
     safe = frame.copy()
-    for column in safe.columns:
-        series = safe[column]
-        if not (is_numeric_dtype(series.dtype) or is_bool_dtype(series.dtype)):
-            safe[column] = series.map(neutralise)
+    for column in _text_columns(safe):
+        safe[column] = safe[column].map(neutralise)
     return safe
+
+
+def write_frame(frame: pd.DataFrame, stream: IO[str]) -> None:
+    """``frame`` as CSV (``\\n`` line ends, no index) with its text cells neutralised.
+
+    Python's csv module quotes a field holding a line feed but not one holding a lone carriage
+    return when lines end in ``\\n``, and readers take that CR for the end of the row: a
+    table with a CR in any text cell is written with every text cell quoted (numbers are not),
+    which reads back as the same values.
+    """
+    safe = neutralised(frame)
+    has_cr = any(
+        isinstance(value, str) and "\r" in value
+        for column in _text_columns(safe)
+        for value in safe[column]
+    )
+    quoting: Literal[0, 2] = 2 if has_cr else 0  # csv.QUOTE_NONNUMERIC, csv.QUOTE_MINIMAL
+    safe.to_csv(stream, index=False, lineterminator="\n", quoting=quoting)

@@ -12,7 +12,7 @@ import pandas as pd
 from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
 from medkit_replay.outputs.atomic import atomic_text
-from medkit_replay.outputs.csv_safety import neutralised
+from medkit_replay.outputs.csv_safety import write_frame
 from medkit_replay.outputs.json_report import (
     clear_dict,
     cluster_dict,
@@ -181,6 +181,6 @@ def write_csv(result: Result, directory: Path) -> list[Path]:
                 )
         path = directory / f"{name}.csv"
         with atomic_text(path) as stream:
-            neutralised(flat).to_csv(stream, index=False, lineterminator="\n")
+            write_frame(flat, stream)
         written.append(path)
     return written

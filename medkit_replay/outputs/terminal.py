@@ -55,8 +55,9 @@ MAX_WARNING = 500
 """Characters of a warning shown; the JSON report has it whole."""
 DEFAULT_WIDTH = 80
 """Columns when ``COLUMNS`` and the terminal say nothing usable (0, negative, not a number)."""
-WIDTH_RANGE = (40, 1000)
-"""Widths outside this range (``COLUMNS=1``, ``COLUMNS=100000``) are brought back into it."""
+WIDTH_RANGE = (72, 1000)
+"""Widths outside this range (``COLUMNS=1``, ``COLUMNS=100000``) are brought back into it:
+the faults table needs some 72 columns to show every column."""
 EPOCH_FLOOR_NS = 10**18
 """Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
