@@ -14,7 +14,7 @@ import html
 import string
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import printable
+from medkit_replay.checks.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -75,7 +75,8 @@ def workflow_commands(runs: Sequence[CheckRun]) -> list[str]:
             commands.append(f"::error {where},title={title}::{escape_data(chr(10).join(lines))}")
         for warning in run.warnings:
             title = escape_property(printable(f"medkit-replay warning ({run.label})"))
-            commands.append(f"::warning title={title}::{escape_data(printable(warning))}")
+            shown = printable(clip(warning, WARNING_CAP))
+            commands.append(f"::warning title={title}::{escape_data(shown)}")
     return commands
 
 
@@ -116,6 +117,6 @@ def step_summary(runs: Sequence[CheckRun]) -> str:
             lines.append(f"| {mark} | {markdown(verdict.rule.name)} | {_cell(verdict)} |")
         lines.append("")
         if run.warnings:
-            lines += [f"- ⚠️ {markdown(w)}" for w in run.warnings]
+            lines += [f"- ⚠️ {markdown(clip(w, WARNING_CAP))}" for w in run.warnings]
             lines.append("")
     return "\n".join(lines) + "\n"

@@ -13,7 +13,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.checks.text import printable
+from medkit_replay.checks.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -78,7 +78,8 @@ def run_renderable(run: CheckRun) -> list[RenderableType]:
     for verdict in run.verdicts:
         _verdict_rows(grid, verdict)
     for warning in run.warnings:
-        grid.add_row(Text("!", style="bold yellow"), Text(printable(warning), style="yellow"))
+        shown = printable(clip(warning, WARNING_CAP))
+        grid.add_row(Text("!", style="bold yellow"), Text(shown, style="yellow"))
     return [head, grid, Text("")]
 
 

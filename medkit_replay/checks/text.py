@@ -40,6 +40,11 @@ def xml_text(text: str) -> str:
     return _NOT_XML.sub(lambda m: _escape_char(m.group()), text)
 
 
+WARNING_CAP = 500
+"""Characters of one warning shown on a terminal, a page or a CI annotation (the JSON report
+holds it whole): a recording can put megabytes into one."""
+
+
 def clip(text: str, limit: int) -> str:
     """At most ``limit`` characters of ``text``; a longer text is cut and ends with an ellipsis
     and how many characters were left out (``abc... (+9,997 characters)``, ASCII for any

@@ -15,7 +15,7 @@ from datetime import UTC, datetime
 from importlib import resources
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import clip
+from medkit_replay.checks.text import WARNING_CAP, clip
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_tables import (
@@ -47,7 +47,6 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 EPOCH_LIKE_NS = 10**17
-WARNING_CAP = 500  # characters of one warning shown; the JSON report has it whole
 AXIS_TICKS = 10  # ticks drawn without JavaScript; the script redraws them for each zoom
 
 

@@ -22,7 +22,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.checks.text import clip, printable
+from medkit_replay.checks.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -51,8 +51,8 @@ MAX_DESCRIPTION = 100
 """Characters of a description shown; the reports have it whole."""
 MAX_TEXT = 200
 """Characters of a source, a code, a cluster id shown (a valid fault code has at most 128)."""
-MAX_WARNING = 500
-"""Characters of a warning shown; the JSON report has it whole."""
+MAX_WARNING = WARNING_CAP
+"""Characters of a warning (or a path) shown; the JSON report has it whole."""
 DEFAULT_WIDTH = 80
 """Columns when ``COLUMNS`` and the terminal say nothing usable (0, negative, not a number)."""
 WIDTH_RANGE = (72, 1000)

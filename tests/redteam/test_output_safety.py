@@ -24,6 +24,7 @@ from medkit_replay.outputs.csv_safety import neutralise
 from medkit_replay.outputs.mcap_events import SEC_MAX, SEC_MIN, message_store, time_fields
 from medkit_replay.outputs.parquet import INT64_MAX, INT64_MIN, clamped
 from medkit_replay.pipeline import replay
+from tests.checks.support import write_budget
 from tests.inputs.builders import diag, write_bag, write_bare
 from tests.outputs.scripts import clear, report, write_script
 from tests.redteam.support import MIB, assert_one_line_error, run_limited
@@ -311,6 +312,25 @@ def test_a_megabyte_warning_is_cut_on_the_terminal_and_the_page(tmp_path: Path) 
     report_json = strict_json((out / "r.json").read_text(encoding="utf-8"))
     assert isinstance(report_json, dict)
     assert any(fmt[1:] in warning for warning in report_json["warnings"])
+
+
+def test_a_megabyte_warning_is_cut_in_the_check_gate(tmp_path: Path) -> None:
+    """The check command prints the replay's warnings on the terminal, as GitHub annotations
+    and in the step summary: each cut the same way."""
+    bag = write_bare(tmp_path / "w.mcap", [diag(SEC)], serialization="z" * 1_000_000)
+    budget = write_budget(tmp_path, "- never_confirm: ['NOTHING_*']")
+    summary = tmp_path / "summary.md"
+    outcome = run_limited(
+        ["check", bag, "--budget", budget, "--github"],
+        memory=1024 * MIB,
+        env={"GITHUB_STEP_SUMMARY": str(summary)},
+        timeout=120,
+    )
+    assert outcome.status == 0, outcome.stderr
+    assert len(outcome.stdout) < 10_000 and "characters)" in outcome.stdout
+    assert "::warning" in outcome.stdout
+    text = summary.read_text(encoding="utf-8")
+    assert len(text) < 5000 and re.search(r"\+999,\d{3} characters", text)
 
 
 def test_clip_names_what_it_left_out() -> None:
