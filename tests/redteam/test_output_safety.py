@@ -330,7 +330,7 @@ def test_a_megabyte_warning_is_cut_in_the_check_gate(tmp_path: Path) -> None:
     assert len(outcome.stdout) < 10_000 and "characters)" in outcome.stdout
     assert "::warning" in outcome.stdout
     text = summary.read_text(encoding="utf-8")
-    assert len(text) < 5000 and re.search(r"\+999,\d{3} characters", text)
+    assert len(text) < 5000 and "zzzz" in text
 
 
 def test_clip_names_what_it_left_out() -> None:
