@@ -176,17 +176,26 @@ def _time(store: Typestore, t_ns: int) -> MsgType:
     return store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
 
 
+def _text(value: str) -> str:
+    """Text CDR can carry (UTF-8): a lone surrogate is written as its escape, ``\\udcff``."""
+    return value if value.isascii() else value.encode("utf-8", "backslashreplace").decode()
+
+
+def _texts(values: tuple[str, ...]) -> list[str]:
+    return [_text(value) for value in values]
+
+
 def _fault(store: Typestore, fault: FaultSnapshot) -> MsgType:
     return store.types[f"{MEDKIT_PACKAGE}/msg/Fault"](
-        fault_code=fault.fault_code,
+        fault_code=_text(fault.fault_code),
         severity=fault.severity,
-        description=fault.description,
+        description=_text(fault.description),
         first_occurred=_time(store, fault.first_occurred_ns),
         last_occurred=_time(store, fault.last_occurred_ns),
         last_passed=_time(store, fault.last_passed_ns),
         occurrence_count=fault.occurrence_count,
         status=fault.status,
-        reporting_sources=list(fault.reporting_sources),
+        reporting_sources=_texts(fault.reporting_sources),
     )
 
 
@@ -197,7 +206,7 @@ def fault_event_cdr(event: FaultEvent) -> bytes:
         event_type=event.event_type,
         fault=_fault(store, event.fault),
         timestamp=_time(store, event.t_ns),
-        auto_cleared_codes=list(event.auto_cleared_codes),
+        auto_cleared_codes=_texts(event.auto_cleared_codes),
     )
     return bytes(store.serialize_cdr(message, FAULT_EVENT_TYPE))
 
@@ -207,11 +216,11 @@ def transition_cdr(transition: Transition) -> bytes:
     store = message_store()
     message = store.types[TRANSITION_TYPE](
         stamp=_time(store, transition.t_ns),
-        fault_code=transition.fault_code,
+        fault_code=_text(transition.fault_code),
         from_status=transition.from_status or "",
         to_status=transition.to_status,
         cause=transition.cause,
-        source_id=transition.source_id or "",
+        source_id=_text(transition.source_id or ""),
     )
     return bytes(store.serialize_cdr(message, TRANSITION_TYPE))
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import pandas as pd
-from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.csv_safety import write_frame
@@ -134,32 +133,37 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
         "clusters": [cluster_dict(c) for c in result.clusters],
         "near_misses": [near_miss_dict(n) for n in result.near_misses],
     }
-    return {
-        name: pd.DataFrame(rows[name], columns=pd.Index(columns))
-        for name, columns in TABLE_COLUMNS.items()
-    }
+    return {name: _frame(rows[name], columns) for name, columns in TABLE_COLUMNS.items()}
+
+
+def _frame(rows: list[dict[str, object]], columns: list[str]) -> pd.DataFrame:
+    try:
+        return pd.DataFrame(rows, columns=pd.Index(columns))
+    except UnicodeEncodeError:  # Arrow-backed strings refuse lone surrogates
+        return pd.DataFrame([_encodable_row(row) for row in rows], columns=pd.Index(columns))
 
 
 def _encodable_text(value: object) -> object:
-    # A lone surrogate (from a script's "\udcff") cannot be written as UTF-8: written as its escape.
+    # A lone surrogate (a reader let "\udcff" through) cannot be written as UTF-8: its escape.
     if isinstance(value, str) and not value.isascii():
         return value.encode("utf-8", "backslashreplace").decode("utf-8")
+    if isinstance(value, list):
+        return [_encodable_text(item) for item in value]
     return value
+
+
+def _encodable_row(row: dict[str, object]) -> dict[str, object]:
+    return {key: _encodable_text(value) for key, value in row.items()}
 
 
 def encodable(frame: pd.DataFrame) -> pd.DataFrame:
     """The table with every text cell UTF-8 can encode (lone surrogates as ``\\udcff``); lists
-    of text likewise; numeric and boolean columns untouched. Valid text is unchanged."""
+    of text likewise. Only columns of Python objects can hold such text (Arrow-backed string
+    columns refuse it when built); valid text is unchanged."""
     safe = frame.copy()
     for column in safe.columns:
-        series = safe[column]
-        if is_numeric_dtype(series.dtype) or is_bool_dtype(series.dtype):
-            continue
-        safe[column] = series.map(
-            lambda v: (
-                [_encodable_text(item) for item in v] if isinstance(v, list) else _encodable_text(v)
-            )
-        )
+        if safe[column].dtype == object:
+            safe[column] = safe[column].map(_encodable_text)
     return safe
 
 

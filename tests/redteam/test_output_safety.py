@@ -12,6 +12,7 @@ import io
 import json
 import re
 import shutil
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import pyarrow.parquet as pq
@@ -21,8 +22,16 @@ from mcap.reader import make_reader
 from medkit_replay.checks.text import clip
 from medkit_replay.outputs import terminal
 from medkit_replay.outputs.csv_safety import neutralise
-from medkit_replay.outputs.mcap_events import SEC_MAX, SEC_MIN, message_store, time_fields
-from medkit_replay.outputs.parquet import INT64_MAX, INT64_MIN, clamped
+from medkit_replay.outputs.html import write_html
+from medkit_replay.outputs.mcap_events import (
+    SEC_MAX,
+    SEC_MIN,
+    message_store,
+    time_fields,
+    write_mcap,
+)
+from medkit_replay.outputs.parquet import INT64_MAX, INT64_MIN, clamped, write_parquet
+from medkit_replay.outputs.tables import write_csv
 from medkit_replay.pipeline import replay
 from tests.checks.support import write_budget
 from tests.inputs.builders import diag, write_bag, write_bare
@@ -171,6 +180,26 @@ def test_bidirectional_controls_are_visible_in_page_and_summary(tmp_path: Path) 
     report_json = strict_json((out / "r.json").read_text(encoding="utf-8"))
     assert isinstance(report_json, dict)
     assert report_json["faults"][0]["description"] == hostile
+
+
+def test_lone_surrogates_never_stop_a_writer(tmp_path: Path) -> None:
+    """Text UTF-8 cannot encode (a lone surrogate a reader let through) is written as its
+    escape by every file writer instead of ending the run."""
+    script = write_script(
+        tmp_path / "s.jsonl", [report(SEC, "MOTOR", severity=3, description="d", source="/s")]
+    )
+    result = replay([script])
+    fault = replace(result.faults[0], description="bad \udcff", reporting_sources=("/\udcff",))
+    events = [replace(e, fault=replace(e.fault, description="bad \udcff")) for e in result.events]
+    hostile = replace(result, faults=(fault,), events=events)
+    write_csv(hostile, tmp_path / "csv")
+    write_parquet(hostile, tmp_path / "pq")
+    write_mcap(hostile, tmp_path / "e.mcap")
+    write_html(hostile, tmp_path / "r.html")
+    assert "bad \\udcff" in (tmp_path / "csv" / "faults.csv").read_text(encoding="utf-8")
+    assert "bad \\udcff" in (tmp_path / "r.html").read_text(encoding="utf-8")
+    faults = pq.read_table(tmp_path / "pq" / "faults.parquet").to_pylist()
+    assert faults[0]["reporting_sources"] == ["/\\udcff"]
 
 
 # --- 4. CSV formulas ----------------------------------------------------------------------------
