@@ -15,7 +15,12 @@ import pytest
 
 from medkit_replay.commands.diff import read_report
 from medkit_replay.errors import InputError
-from tests.redteam.support import assert_one_line_error, run_limited
+from tests.redteam.support import (
+    DEFAULT_CPU_SECONDS,
+    DEFAULT_MEMORY,
+    assert_one_line_error,
+    run_limited,
+)
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -35,8 +40,12 @@ def script(tmp_path: Path, *lines: str, name: str = "run.jsonl") -> Path:
     return path
 
 
-def analyze(*argv: str | Path, **limits: int) -> Outcome:
-    return run_limited(["analyze", *argv, "--quiet"], timeout=60, **limits)
+def analyze(
+    *argv: str | Path, memory: int = DEFAULT_MEMORY, cpu_seconds: int = DEFAULT_CPU_SECONDS
+) -> Outcome:
+    return run_limited(
+        ["analyze", *argv, "--quiet"], memory=memory, cpu_seconds=cpu_seconds, timeout=60
+    )
 
 
 def report(tmp_path: Path, name: str = "report.json") -> Path:
@@ -62,8 +71,12 @@ def with_line(base: Path, target: Path, key: str, raw_value: str) -> int:
     return body.count("\n") + 1
 
 
-def diff(*argv: str | Path, **limits: int) -> Outcome:
-    return run_limited(["diff", *argv, "--quiet"], timeout=60, **limits)
+def diff(
+    *argv: str | Path, memory: int = DEFAULT_MEMORY, cpu_seconds: int = DEFAULT_CPU_SECONDS
+) -> Outcome:
+    return run_limited(
+        ["diff", *argv, "--quiet"], memory=memory, cpu_seconds=cpu_seconds, timeout=60
+    )
 
 
 # -- 1. nesting ----------------------------------------------------------------------------
