@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError
+from medkit_replay.model import NS_PER_SEC
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -114,9 +115,10 @@ class ParameterReader:
         """``fault_reporter.local_filtering.*`` read and narrowed as the FaultReporter does."""
         defaults = LocalFilterConfig()
         window = self.double(_FILTER + "default_window_sec", defaults.default_window_sec)
-        if not math.isfinite(window):
-            # NaN and inf slip past upstream's ``<= 0`` check into an undefined duration cast.
-            raise self._wrong(_FILTER + "default_window_sec", "a finite double", window)
+        if not math.isfinite(window * NS_PER_SEC):
+            # NaN, inf and seconds whose nanoseconds overflow a double slip past upstream's
+            # ``<= 0`` check into an undefined duration cast.
+            raise self._wrong(_FILTER + "default_window_sec", "a finite double of seconds", window)
         return LocalFilterConfig(
             enabled=self.boolean(_FILTER + "enabled", enabled_default),
             default_threshold=to_int32(

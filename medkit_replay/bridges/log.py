@@ -81,7 +81,7 @@ class LogBridgeConfig:
         if tracked != requested:
             read.warn(f"max_tracked_nodes {requested} clamped to {tracked}")
         cooldown = read.double("report_cooldown_sec", _DEFAULT_COOLDOWN_SEC)
-        if not math.isfinite(cooldown) or cooldown < 0.0:
+        if not math.isfinite(cooldown * NS_PER_SEC) or cooldown < 0.0:
             read.warn(
                 f"report_cooldown_sec {cooldown:.2f} must be finite and >= 0. "
                 f"Using default {_DEFAULT_COOLDOWN_SEC}."

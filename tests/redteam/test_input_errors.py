@@ -15,6 +15,7 @@ import pytest
 
 from medkit_replay.commands.diff import read_report
 from medkit_replay.errors import InputError
+from tests.inputs.builders import diag, log, write_bag
 from tests.redteam.support import (
     DEFAULT_CPU_SECONDS,
     DEFAULT_MEMORY,
@@ -320,6 +321,36 @@ def test_tiny_auto_confirm_window_stays_on(tmp_path: Path) -> None:
     assert outcome.status == 0, outcome.stderr
     causes = [t["cause"] for t in json.loads(out.read_text())["transitions"]]
     assert causes == ["report", "auto_confirm"]
+
+
+def bridge_bag(tmp_path: Path) -> Path:
+    """A bag with /diagnostics and /rosout traffic, so both bridges run."""
+    records = [diag(1_000_000_000), log(2_000_000_000, name="planner"), diag(3_000_000_000)]
+    return write_bag(tmp_path / "bag", records)
+
+
+def test_log_cooldown_past_nanoseconds_falls_back(tmp_path: Path) -> None:
+    # 1e308 s is finite, but not in nanoseconds: treated as inf is, with upstream's default.
+    config = tmp_path / "params.yaml"
+    config.write_text(
+        "log_bridge:\n  ros__parameters:\n    severity_floor: 40\n"
+        "    report_cooldown_sec: 1.0e+308\n"
+    )
+    out = tmp_path / "r.json"
+    outcome = analyze(bridge_bag(tmp_path), "--config", config, "--json", out)
+    assert outcome.status == 0, outcome.stderr
+    warnings: list[str] = json.loads(out.read_text())["warnings"]
+    assert any("report_cooldown_sec" in w and "Using default 5.0" in w for w in warnings)
+
+
+def test_filter_window_past_nanoseconds_is_refused(tmp_path: Path) -> None:
+    config = tmp_path / "params.yaml"
+    config.write_text(
+        "diagnostic_bridge:\n  ros__parameters:\n    fault_reporter:\n"
+        "      local_filtering: {default_window_sec: 1.0e+308}\n"
+    )
+    outcome = analyze(bridge_bag(tmp_path), "--config", config)
+    assert_one_line_error(outcome, f"{config}:4:", "default_window_sec", "finite double")
 
 
 # -- 8. diff --update keeps the baseline's mode ------------------------------------------------
