@@ -17,10 +17,8 @@ Throughput mode prints messages per second over the read topics for (a) rosbags 
 raw, (b) rosbags reading and deserializing them, (c) ``medkit_replay.replay`` end to end with
 the log bridge on, (d) a straightforward pipeline (rosbags AnyReader + deserialize + our
 bridges and engine, no spooling), and the ratios c/a, c/b, c/d against the targets (c/a >= 0.5,
-aiming at 1.0; c/d >= 5), then (r) ``replay(reference=True)``, the reference path the fast path
-must equal (rosbags decoding, whole chunks, request and record objects), and c/r. Each is run
-``--repeat`` times and the fastest wall time is kept (other work on the machine only ever slows
-a run down).
+aiming at 1.0; c/d >= 5). Each is run ``--repeat`` times and the fastest wall time is kept
+(other work on the machine only ever slows a run down).
 
 Mission mode writes a one-hour mission (10 Hz DiagnosticArrays of 20 statuses, 5 action
 servers, 50 rosout lines per second, 5 GB of 15 Hz camera frames), streaming, and measures
@@ -395,13 +393,7 @@ def rosbags_deserialize(bag: Path, _params: Path) -> int:
 
 def medkit_analyze(bag: Path, params: Path) -> int:
     """(c) ``medkit-replay analyze`` minus writing outputs: the whole pipeline."""
-    return replay([bag], [params], reference=False).summary.messages_read
-
-
-def medkit_reference(bag: Path, params: Path) -> int:
-    """(r) As (c) on the reference path (``MEDKIT_REPLAY_REFERENCE=1``): rosbags decoding,
-    whole chunks, request and record objects, as analyze ran before the fast path."""
-    return replay([bag], [params], reference=True).summary.messages_read
+    return replay([bag], [params]).summary.messages_read
 
 
 def straightforward(bag: Path, params: Path) -> int:
@@ -487,16 +479,14 @@ def throughput(bag: Path, params: Path, repeat: int, with_straightforward: bool)
     ]
     if with_straightforward:
         runs.append(("(d) AnyReader + deserialize + bridges/engine", straightforward))
-    runs.append(("(r) analyze on the reference path", medkit_reference))
     results = [measure(label, run, bag, params, repeat) for label, run in runs]
-    reference = results.pop()
     print(f"\nbest of {repeat}, {results[0].messages:,} messages on the read topics:")
     for m in results:
         print(
             f"  {m.label:<44} {m.rate:>10,.0f} msgs/s  {m.wall_s:7.2f} s wall  "
             f"{m.cpu_s:7.2f} s cpu  {size / 1e6 / m.wall_s:6.0f} MB/s of recording"
         )
-    if len({m.messages for m in [*results, reference]}) != 1:
+    if len({m.messages for m in results}) != 1:
         print("  WARNING: the readers did not read the same number of messages")
     a, b, c = results[0], results[1], results[2]
     print(f"  c/a = {c.rate / a.rate:.2f}   c/b = {c.rate / b.rate:.2f}", end="")
@@ -507,10 +497,6 @@ def throughput(bag: Path, params: Path, repeat: int, with_straightforward: bool)
     if with_straightforward:
         print(f"   c/d = {results[3].cpu_s / c.cpu_s:.2f}", end="")
     print("   (the same by CPU time, less sensitive to other load on the machine)")
-    print(
-        f"  c/r = {c.rate / reference.rate:.2f}   (the fast path against the reference path, "
-        f"{reference.wall_s:.2f} s wall)"
-    )
     print(
         f"  target c/a >= 0.5 (aim 1.0): {'met' if c.rate >= 0.5 * a.rate else 'NOT met'}", end=""
     )

@@ -5,7 +5,6 @@ The only place the layers meet (besides the CLI, which calls this).
 
 from __future__ import annotations
 
-import os
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -66,15 +65,6 @@ PROGRESS_EVERY = 2048
 
 SETTLE_EVERY = 1024
 """Messages between two spills of the records the fast path piled up (bounds memory)."""
-
-REFERENCE_ENV = "MEDKIT_REPLAY_REFERENCE"
-"""Set to 1 to make every replay take the reference path (see :func:`replay`)."""
-
-
-def reference_by_default() -> bool:
-    """Whether ``MEDKIT_REPLAY_REFERENCE`` asks for the reference path."""
-    return os.environ.get(REFERENCE_ENV, "").strip().lower() not in ("", "0", "false", "no")
-
 
 Phase = Literal["prescan", "replay"]
 """``prescan``: the pass over recorded ReportFault calls only; ``replay``: the replay itself."""
@@ -156,28 +146,21 @@ class _Router:
         self.recorded_events: Spool[RecordedEvent] = Spool()
 
     def requests(self, message: Message) -> Sequence[Request]:
+        """What a message without a bridge handler carries: script requests, recorded service
+        calls; recorded FaultEvents are kept for parity."""
         role, t_ns, topic, msg = message.role, message.t_ns, message.topic, message.msg
         if role == "script":
             assert isinstance(msg, ReportRequest | ClearRequest)
             return (msg,)
-        if role == "action_status":
-            return self.action.on_message(t_ns, topic, msg)
         if role in ("report_fault", "clear_fault"):
             return self.services.on_message(t_ns, topic, message.msgtype, msg)
         if role == "fault_events":
             self.recorded_events.append(recorded_event(t_ns, topic, msg))
-            return ()
-        if self.diagnostic.wants(topic, message.msgtype):
-            return self.diagnostic.on_message(t_ns, topic, msg)
-        if self.log is not None and self.log.wants(topic, message.msgtype):
-            return self.log.on_message(t_ns, topic, msg)
         return ()
 
     def handler(self, role: str, topic: str, msgtype: str) -> _Handler | None:
-        """The bridge's fast entry for messages of this role, topic and type, if it has one.
-
-        The choice :meth:`requests` makes, made once: None leaves the message to it.
-        """
+        """The bridge that takes messages of this role, topic and type, if any (None: the
+        message goes to :meth:`requests`)."""
         if role == "diagnostics" and self.diagnostic.wants(topic, msgtype):
             return self.diagnostic.feed
         if role == "rosout" and self.log is not None and self.log.wants(topic, msgtype):
@@ -191,7 +174,6 @@ def _recorded_report_codes(
     inputs: Sequence[Path],
     progress: Callable[[Progress], None] | None,
     every: int,
-    reference: bool,
 ) -> set[str]:
     """Fault codes present in recorded ReportFault traffic (a pre-pass over those topics only)."""
     services = ServiceCallReplayer()
@@ -199,9 +181,7 @@ def _recorded_report_codes(
     bags = [p for p in inputs if p.suffix != ".jsonl"]
     if not bags:
         return codes
-    with open_recording(
-        bags, only_roles=("report_fault",), light=not reference, reference=reference
-    ) as recording:
+    with open_recording(bags, only_roles=("report_fault",), light=True) as recording:
         meter = _Meter(progress, "prescan", recording, every) if progress is not None else None
         next_at = meter.next_at if meter is not None else 0
         messages = 0
@@ -227,7 +207,6 @@ def replay(
     *,
     progress: Callable[[Progress], None] | None = None,
     progress_every: int = PROGRESS_EVERY,
-    reference: bool | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -239,10 +218,6 @@ def replay(
             (``done``). Passes: ``prescan`` (recorded ReportFault calls; bags only), then
             ``replay``. The result does not depend on it; what it raises propagates.
         progress_every: messages between two calls.
-        reference: take the reference path: rosbags decodes every message, MCAP chunks are
-            read whole, bridges return request objects and the manager records objects. The
-            default (None) is the fast path unless ``MEDKIT_REPLAY_REFERENCE=1`` is set; both
-            give the same result, byte for byte.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -256,20 +231,17 @@ def replay(
     options, option_warnings = replay_options(params)
     warnings += option_warnings
 
-    if reference is None:
-        reference = reference_by_default()
-    fast = not reference
-    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS if fast else None)
-    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS if fast else None)
-    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS if fast else None)
-    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS if fast else None)
+    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS)
+    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS)
+    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS)
+    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS)
     output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
     manager = FaultManager(manager_config, output)
-    if fast:  # rows straight into the spools' tails; the loop settles them now and then
-        manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
+    # Rows straight into the spools' tails; the loop settles them now and then.
+    manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
     timeline = Timeline(manager)
     router = _Router(options)
-    recorded_codes = _recorded_report_codes(paths, progress, progress_every, reference)
+    recorded_codes = _recorded_report_codes(paths, progress, progress_every)
     gate = _Gate(timeline, recorded_codes)
     rosout = router.log is not None
     rosout_topic = router.log.topic if router.log is not None else "/rosout"
@@ -278,14 +250,12 @@ def replay(
         rosout=rosout,
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
-        light=fast,
-        reference=reference,
+        light=True,
     ) as recording:
         meter = (
             _Meter(progress, "replay", recording, progress_every) if progress is not None else None
         )
-        loop = _reference_loop if reference else _fast_loop
-        messages = loop(recording, meter, timeline, router, gate)
+        messages = _replay_loop(recording, meter, timeline, router, gate)
         warnings += recording.warnings
         summaries = recording.inputs
         if meter is not None:
@@ -370,14 +340,7 @@ class _Gate:
         self.withheld_codes.setdefault(origin, set()).add(fault_code)
 
     def apply(self, request: Request) -> None:
-        """One request object, as the reference loop hands them over."""
-        if request.origin in _BRIDGE_ORIGINS and request.fault_code in self.recorded_codes:
-            self._withhold(request.origin, request.fault_code)
-            return
-        self.timeline.apply(request)
-
-    def apply_fast(self, request: Request) -> None:
-        """:meth:`apply`, a report going to the manager field by field."""
+        """One request object (a script's, a recorded service call's)."""
         if request.origin in _BRIDGE_ORIGINS and request.fault_code in self.recorded_codes:
             self._withhold(request.origin, request.fault_code)
         elif isinstance(request, ReportRequest):
@@ -408,34 +371,18 @@ class _Gate:
         )
 
 
-def _reference_loop(
+def _replay_loop(
     recording: Recording, meter: _Meter | None, timeline: Timeline, router: _Router, gate: _Gate
 ) -> int:
-    """The reference path: request objects from the bridges, applied one by one."""
-    messages = 0
-    next_at = meter.next_at if meter is not None else 0  # 0: never reached
-    for message in recording.messages():
-        messages += 1
-        if messages == next_at and meter is not None:
-            meter.tick(messages, message.t_ns)
-            next_at = meter.next_at
-        timeline.advance(message.t_ns)
-        for request in router.requests(message):
-            gate.apply(request)
-    return messages
-
-
-def _fast_loop(
-    recording: Recording, meter: _Meter | None, timeline: Timeline, router: _Router, gate: _Gate
-) -> int:
-    """The fast path: bridges report field by field, the manager records rows."""
+    """Every message, in time order, to its bridge (field by field into the manager, which
+    records rows) or as request objects to the gate; timers run before each message's time."""
     messages = 0
     next_at = meter.next_at if meter is not None else 0  # 0: never reached
     settle_at = SETTLE_EVERY
     output = timeline.manager.output
     logs = (output.reports, output.events, output.transitions)
     spools = [log for log in logs if isinstance(log, Spool)]
-    report, apply = gate.report, gate.apply_fast
+    report, apply = gate.report, gate.apply
     handlers: dict[tuple[str, str, str], _Handler | None] = {}
     due = timeline.due_ns()
     t_ns: int | None = None

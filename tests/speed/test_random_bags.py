@@ -1,4 +1,4 @@
-"""Random recordings replayed on the fast path and the reference path: the same JSON report.
+"""Random recordings replayed, and by the plain oracle: the same conclusions.
 
 The bags mix diagnostics, logs, action status, recorded service calls and FaultEvents with a
 large unselected topic (so MCAP chunks are read through their message indexes), in MCAP or
