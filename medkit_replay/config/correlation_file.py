@@ -33,6 +33,7 @@ from medkit_replay.engine.correlation.rules import (
     validate_config,
 )
 from medkit_replay.files import read_limited
+from medkit_replay.yaml_bounds import shown_text
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -220,9 +221,15 @@ def load_correlation(path: Path) -> CorrelationLoad:
     if not config.enabled:
         return _no_engine(f"{path}", "Correlation explicitly disabled in config")
     validation = validate_config(config)
-    messages = [f"{path}: Correlation config: {warning}" for warning in validation.warnings]
+    messages = [
+        f"{path}: Correlation config: {shown_text(warning, limit=400)}"
+        for warning in validation.warnings
+    ]
     if not validation.valid:
-        messages.extend(f"{path}: Correlation config error: {error}" for error in validation.errors)
+        messages.extend(
+            f"{path}: Correlation config error: {shown_text(error, limit=400)}"
+            for error in validation.errors
+        )
         count = len(validation.errors)
         messages.append(
             f"{path}: CORRELATION IS DISABLED FOR THIS RUN: {count} validation "

@@ -22,6 +22,7 @@ from medkit_replay.config.yamlcpp import (
 )
 from medkit_replay.engine.thresholds import EntityOverride
 from medkit_replay.files import read_limited
+from medkit_replay.yaml_bounds import shown_text
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -45,7 +46,8 @@ def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOv
         confirmation = as_int32(value)
         if confirmation > 0:
             warnings.append(
-                f"{where}:{line_of(value)}: confirmation_threshold for '{prefix}' should be <= 0, "
+                f"{where}:{line_of(value)}: confirmation_threshold for '{shown_text(prefix)}' "
+                "should be <= 0, "
                 f"got {confirmation}. Using {-confirmation}."
             )
             confirmation = -confirmation
@@ -58,7 +60,8 @@ def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOv
         if healing < 0:
             fixed = _wrap_int32(-healing)
             warnings.append(
-                f"{where}:{line_of(value)}: healing_threshold for '{prefix}' should be >= 0, "
+                f"{where}:{line_of(value)}: healing_threshold for '{shown_text(prefix)}' "
+                "should be >= 0, "
                 f"got {healing}. Using {fixed}."
             )
             healing = fixed
@@ -102,7 +105,8 @@ def load_entity_thresholds(
             prefix = as_string(key)
             if not is_map(value):
                 warnings.append(
-                    f"{where}:{line_of(key)}: Skipping non-map entry for prefix '{prefix}'"
+                    f"{where}:{line_of(key)}: Skipping non-map entry for prefix "
+                    f"'{shown_text(prefix)}'"
                 )
                 continue
             entries.append(_entry(prefix, value, where, warnings))

@@ -15,7 +15,12 @@ from yaml.reader import Reader
 from yaml.resolver import BaseResolver
 from yaml.scanner import Scanner
 
-from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded_at, describe_yaml_error
+from medkit_replay.yaml_bounds import (
+    YamlBoundsError,
+    compose_bounded_at,
+    describe_yaml_error,
+    shown_text,
+)
 
 if TYPE_CHECKING:
     from yaml.error import Mark
@@ -214,7 +219,7 @@ def as_bool(node: Node) -> bool:
             value = _BOOL_NAMES.get(text.lower())
             if value is not None:
                 return value
-        raise YamlCppError(f"bad conversion: {text!r} is not a bool", line_of(node))
+        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not a bool", line_of(node))
     raise YamlCppError(f"bad conversion: a {kind_name(node)} is not a bool", line_of(node))
 
 
@@ -262,7 +267,7 @@ def as_uint32(node: Node) -> int:
         value = _stream_integer(text, signed=False)
         if value is not None:
             return value
-        raise YamlCppError(f"bad conversion: {text!r} is not a uint32", line_of(node))
+        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not a uint32", line_of(node))
     raise YamlCppError(f"bad conversion: a {kind_name(node)} is not a uint32", line_of(node))
 
 
@@ -273,5 +278,5 @@ def as_int32(node: Node) -> int:
         value = _stream_integer(text, signed=True)
         if value is not None:
             return value
-        raise YamlCppError(f"bad conversion: {text!r} is not an int", line_of(node))
+        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not an int", line_of(node))
     raise YamlCppError(f"bad conversion: a {kind_name(node)} is not an int", line_of(node))

@@ -305,6 +305,29 @@ def test_referenced_file_warnings_are_one_line(tmp_path: Path) -> None:
     assert all("\n" not in w for w in warnings)
 
 
+def test_names_in_referenced_file_warnings_are_escaped(tmp_path: Path) -> None:
+    (tmp_path / "entities.yaml").write_text(
+        '"/m\\nx": 5\n"/a\\u202e": {confirmation_threshold: 3}\n'
+    )
+    (tmp_path / "correlation.yaml").write_text(
+        'correlation:\n  enabled: true\n  default_window_ms: "' + HUGE + '"\n'
+    )
+    config = tmp_path / "params.yaml"
+    config.write_text(
+        "fault_manager:\n  ros__parameters:\n"
+        "    correlation: {config_file: correlation.yaml}\n"
+        "    entity_thresholds: {config_file: entities.yaml}\n"
+    )
+    out = tmp_path / "r.json"
+    outcome = analyze(script(tmp_path), "--config", config, "--json", out)
+    assert outcome.status == 0, outcome.stderr
+    warnings: list[str] = json.loads(out.read_text())["warnings"]
+    assert any("prefix '/m\\x0ax'" in w for w in warnings), warnings
+    assert any("'/a\\u202e' should be <= 0" in w for w in warnings), warnings
+    assert any("bad conversion" in w for w in warnings), warnings
+    assert all("\n" not in w and "\u202e" not in w and len(w) < 500 for w in warnings)
+
+
 # -- 2. float parameters ---------------------------------------------------------------------
 
 
