@@ -16,8 +16,7 @@ from operator import itemgetter, sub
 from struct import Struct
 from typing import TYPE_CHECKING, BinaryIO, NamedTuple
 
-from rosbags.rosbag2.storage_mcap import decompress
-
+from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.selection import normalize_typename
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
@@ -60,6 +59,10 @@ _RECORD_HEAD = Struct("<BQH")  # opcode, length, channel id (of a message record
 _INDEX_HEAD = Struct("<BQHI")  # opcode, length, channel id, entries' byte length
 _INDEX_ENTRY = Struct("<QQ")  # log time, offset in the chunk's records
 _ORDER = itemgetter(0, 1)  # (log time, position) of a Timed
+_T_NS = itemgetter(0)  # log time of a Timed
+_SEEN_T_NS = itemgetter(1)  # log time of a (channel id, log time) pair
+LOG_TIME_LIMIT = 2**63
+"""Log times at or above it cannot come from ROS 2 (int64 nanoseconds): such a message is damage."""
 _new = tuple.__new__  # builds a Timed or Raw from a tuple without its Python-level __new__
 
 
@@ -208,6 +211,10 @@ class McapFile:
         except _DamageError as exc:
             return f"summary section is damaged ({exc})"
         self._data_end = summary_start
+        if any(index.start_ns >= LOG_TIME_LIMIT for index in indexes) or (
+            self.end_ns is not None and self.end_ns >= LOG_TIME_LIMIT
+        ):
+            return "summary section holds log times at or after 2^63 ns"
         if chunk_count is not None and chunk_count != len(indexes):
             return f"summary indexes {len(indexes)} of {chunk_count} chunks"
         if indexes and chunk_count and self.connections:
@@ -497,6 +504,8 @@ class McapFile:
                     if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
                         return None
                 k += 1
+        if timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT:
+            return None  # the careful parser skips and reports it
         return timed
 
     def _read_linear(
@@ -535,6 +544,11 @@ class McapFile:
                     int.from_bytes(fixed[:2], "little"),
                     int.from_bytes(fixed[6:14], "little"),
                 )
+                if t_ns >= LOG_TIME_LIMIT:
+                    self._late_message(f"{self.path}: message at byte {pos}", 1, t_ns)
+                    pos = body_end
+                    bio.seek(pos)
+                    continue
                 self._count(cid, t_ns)
                 if self._wants(cid):
                     raw = Raw(self.connections[cid], bio.read(length - MESSAGE_HEADER))
@@ -560,6 +574,13 @@ class McapFile:
         self.warn(
             f"{self.path}: file ends inside {what} at byte {pos} of {self._size} (truncated: "
             f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost"
+        )
+
+    def _late_message(self, where: str, count: int, t_ns: int) -> None:
+        what = "a log time" if count == 1 else f"{count} messages with log times"
+        self.warn(
+            f"{where}: {what} at or after 2^63 ns ({t_ns}), which ROS 2 cannot record; "
+            "damaged, skipped"
         )
 
     def _count(self, cid: int, t_ns: int) -> None:
@@ -589,18 +610,25 @@ class McapFile:
         if size > RECORD_SIZE_LIMIT:
             self.warn(f"{where} ({span}) claims {size} bytes uncompressed; skipped as damaged")
             return
-        try:
-            if partial or (not compression and len(data) == size and not crc):
-                records = data  # what decompress would return, without copying it
-            else:
-                records = memoryview(decompress(bytes(data), compression, size, crc))
-        except Exception as exc:  # rosbags' ReaderError, or the codec's own error
-            self.warn(f"{where} ({span}) cannot be decompressed ({exc}); its messages are lost")
-            return
+        if partial or (not compression and len(data) == size and not crc):
+            records = data  # what decompressing would give, without copying it
+        else:
+            try:
+                records = memoryview(decompress_chunk(bytes(data), compression, size, crc))
+            except ChunkDamageError as exc:
+                self.warn(f"{where} ({span}) cannot be decompressed: {exc}; its messages are lost")
+                return
         fast = None if partial else self._plain_records(records, pos, count)
-        timed, problem = (
-            (fast, None) if fast is not None else self._chunk_records(records, pos, count)
+        timed, problem, late = (
+            (fast, None, None) if fast is not None else self._chunk_records(records, pos, count)
         )
+        if late is not None:
+            late_count, late_at, late_t_ns = late
+            self._late_message(
+                f"{where} ({span}), record at byte {late_at} of its records",
+                late_count,
+                late_t_ns,
+            )
         if problem or partial:
             what = "cut off" if partial else problem
             self.warn(f"{where} ({span}): {what}; kept {len(timed)} messages")
@@ -635,23 +663,38 @@ class McapFile:
                 raw = _new(Raw, (connections[cid], payload))
                 timed.append(_new(Timed, (t_ns, (file_no, pos, at), raw)))
             at = end
+        if (timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT) or (
+            seen and max(map(_SEEN_T_NS, seen)) >= LOG_TIME_LIMIT
+        ):
+            return None  # the careful parser skips and reports them
         for cid, t_ns in seen:
             self._count(cid, t_ns)
         return timed
 
     def _chunk_records(
         self, records: memoryview, pos: int, count: bool
-    ) -> tuple[list[Timed[Raw]], str | None]:
+    ) -> tuple[list[Timed[Raw]], str | None, tuple[int, int, int] | None]:
+        """Every record of a chunk, carefully: its wanted messages, the damage that ended the
+        walk (if any), and messages skipped for log times past int64 (count, first offset, time).
+        """
         timed: list[Timed[Raw]] = []
+        late: tuple[int, int, int] | None = None
         cur = _Cursor(records)
         try:
             while cur.pos < len(records):
                 inner = cur.pos
                 op = cur.uint(1)
+                if op == 0:  # reserved opcode: zero-filled or overwritten bytes, not records
+                    lost = len(records) - inner
+                    problem = f"invalid opcode 0x00 at byte {inner} of its records ({lost} bytes)"
+                    return timed, problem, late
                 record = _Cursor(cur.take(cur.uint(8)))
                 if op == OP_MESSAGE:
                     cid, _, t_ns = record.uint(2), record.uint(4), record.uint(8)
                     record.uint(8)
+                    if t_ns >= LOG_TIME_LIMIT:
+                        late = (1, inner, t_ns) if late is None else (late[0] + 1, late[1], late[2])
+                        continue
                     if count:
                         self._count(cid, t_ns)
                     if self._wants(cid):
@@ -660,5 +703,5 @@ class McapFile:
                 elif op in (OP_SCHEMA, OP_CHANNEL):
                     self._parse_records(bytes(record.rest()), op)
         except _DamageError as exc:
-            return timed, f"damaged record inside ({exc})"
-        return timed, None
+            return timed, f"damaged record inside ({exc})", late
+        return timed, None, late
