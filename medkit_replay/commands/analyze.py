@@ -5,11 +5,9 @@ Outputs are refused before the replay when they would land on an input or a conf
 
 from __future__ import annotations
 
-import importlib
 import sys
 from contextlib import nullcontext
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import click
 
@@ -17,22 +15,12 @@ from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import MedkitReplayError
+from medkit_replay.outputs import OUTPUTS, FileOutput
 from medkit_replay.outputs.atomic import atomic_text, refuse_overlap
 from medkit_replay.outputs.json_report import write_json
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.outputs.terminal import print_summary
 from medkit_replay.pipeline import replay
-
-if TYPE_CHECKING:
-    from medkit_replay.result import Result
-
-# Writers of whole files, imported only when asked for (pandas, pyarrow, mcap are heavy).
-FILE_OUTPUTS = (
-    ("--csv", "CSV", "medkit_replay.outputs.tables", "write_csv"),
-    ("--parquet", "Parquet", "medkit_replay.outputs.parquet", "write_parquet"),
-    ("--mcap", "MCAP", "medkit_replay.outputs.mcap_events", "write_mcap"),
-    ("--html", "HTML", "medkit_replay.outputs.html", "write_html"),
-)
 
 
 @click.command()
@@ -93,12 +81,12 @@ def analyze(
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
-    if parquet_dir is not None:
-        from medkit_replay.outputs.parquet import require_pyarrow  # noqa: PLC0415  # pandas
-
-        require_pyarrow()  # say so before a long replay, not after it
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
-    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, targets))
+    chosen = [
+        (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
+    ]
+    writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
+    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
         result = replay(list(inputs), list(configs), progress=bar)
@@ -113,10 +101,13 @@ def analyze(
             raise MedkitReplayError(
                 f"cannot write report: {err.strerror or err}", path=json_out
             ) from None
-    for option, label, module, function in FILE_OUTPUTS:
-        target = targets[option]
-        if target is not None:
-            _write_output(result, target, label, module, function)
+    for (output, target), writer in zip(chosen, writers, strict=True):
+        try:
+            writer(result, target)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write {output.label}: {err.strerror or err}", path=str(target)
+            ) from None
     if not quiet:
         if json_out == "-":
             print_summary(result, sys.stderr)
@@ -125,31 +116,15 @@ def analyze(
                 print_summary(result, sys.stdout)
 
 
-def _output_paths(json_out: str | None, targets: dict[str, Path | None]) -> list[tuple[str, Path]]:
+def _output_paths(
+    json_out: str | None, chosen: list[tuple[FileOutput, Path]]
+) -> list[tuple[str, Path]]:
     """Every path an output would write, with the option that names it."""
     paths: list[tuple[str, Path]] = []
     if json_out is not None and json_out != "-":
         paths.append(("--json", Path(json_out)))
-    for option, suffix in (("--csv", ".csv"), ("--parquet", ".parquet")):
-        directory = targets[option]
-        if directory is not None:
-            from medkit_replay.outputs.tables import TABLE_COLUMNS  # noqa: PLC0415  # pandas
-
-            paths.append((option, directory))
-            paths.extend((option, directory / f"{name}{suffix}") for name in TABLE_COLUMNS)
-    for option in ("--mcap", "--html"):
-        target = targets[option]
-        if target is not None:
-            paths.append((option, target))
+    for output, target in chosen:
+        paths.append((output.option, target))
+        if output.files is not None:
+            paths.extend((output.option, path) for path in output.files(target))
     return paths
-
-
-def _write_output(result: Result, target: Path, label: str, module: str, function: str) -> None:
-    """Run one file output."""
-    writer = getattr(importlib.import_module(module), function)
-    try:
-        writer(result, target)
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot write {label}: {err.strerror or err}", path=str(target)
-        ) from None
