@@ -11,6 +11,8 @@ from medkit_replay.errors import CheckFailed, ConfigError, InputError, MedkitRep
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from medkit_replay.pipeline import replay
     from medkit_replay.result import Result
 
@@ -22,7 +24,15 @@ __all__ = [
     "Result",
     "__version__",
     "replay",
+    "tables",
 ]
+
+
+def tables(result: Result) -> dict[str, pd.DataFrame]:
+    """Every report table of ``result`` as a pandas DataFrame, keyed by the report's key names."""
+    from medkit_replay.outputs.tables import result_tables  # noqa: PLC0415  # pandas is heavy
+
+    return result_tables(result)
 
 
 def __getattr__(name: str) -> object:

@@ -1,6 +1,6 @@
 """The one result of a replay that every output reads: faults, events, transitions and more.
 
-Plain frozen values; tables as pandas DataFrames are built on request by outputs.tables.
+Plain frozen values; ``medkit_replay.tables(result)`` builds pandas DataFrames of them on request.
 """
 
 from __future__ import annotations
@@ -10,8 +10,6 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
-
-    import pandas as pd
 
     from medkit_replay.model import (
         ClearRecord,
@@ -77,9 +75,3 @@ class Result:
     def fault(self, fault_code: str) -> FaultSnapshot | None:
         """The final state of one fault, or None when it was never reported."""
         return next((f for f in self.faults if f.fault_code == fault_code), None)
-
-    def tables(self) -> dict[str, pd.DataFrame]:
-        """Every report table as a pandas DataFrame, keyed by the report's key names."""
-        from medkit_replay.outputs.tables import result_tables  # noqa: PLC0415  # pandas is heavy
-
-        return result_tables(self)

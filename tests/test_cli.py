@@ -208,10 +208,11 @@ def test_console_script_runs_without_traceback(tmp_path: Path) -> None:
 
 
 def test_python_api_tables() -> None:
+    import medkit_replay  # noqa: PLC0415
     from medkit_replay import replay  # noqa: PLC0415
 
     result = replay([EXAMPLE], [NAV2])
-    tables = result.tables()
+    tables = medkit_replay.tables(result)
     assert set(tables) == {
         "faults",
         "events",

@@ -11,7 +11,7 @@ import pytest
 
 from medkit_replay.cli import main
 from medkit_replay.outputs.parquet import EXTRA_HINT, MissingDependencyError, write_parquet
-from medkit_replay.outputs.tables import TABLE_COLUMNS
+from medkit_replay.outputs.tables import TABLE_COLUMNS, result_tables
 from medkit_replay.pipeline import replay
 from tests.outputs.scripts import T0, healing_config, mission, report, write_script
 
@@ -29,7 +29,7 @@ def result(tmp_path: Path) -> Result:
 def test_one_file_per_table_with_the_report_columns(result: Result, tmp_path: Path) -> None:
     written = write_parquet(result, tmp_path / "out" / "tables")
     assert sorted(p.name for p in written) == sorted(f"{name}.parquet" for name in TABLE_COLUMNS)
-    frames = result.tables()
+    frames = result_tables(result)
     for name, columns in TABLE_COLUMNS.items():
         read = pd.read_parquet(tmp_path / "out" / "tables" / f"{name}.parquet")
         assert list(read.columns) == columns
