@@ -85,7 +85,12 @@ def read_limited(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> bytes:
         FileRefusedError: not a regular file, or larger than ``limit``.
     """
     with open_regular(path) as stream:
-        data = stream.read(limit + 1)
+        # Ask for what the file holds (plus one byte, to see it grow past the limit): read(n)
+        # reserves n bytes up front, and a config is a few KB, not the 64 MiB bound.
+        size = os.fstat(stream.fileno()).st_size
+        data = stream.read(min(size, limit) + 1)
+        if len(data) <= limit and len(data) > size:  # grew while read: take the rest, bounded
+            data += stream.read(limit + 1 - len(data))
     if len(data) > limit:
         raise FileRefusedError(f"larger than {limit:,} bytes, too large for this kind of file")
     return data
