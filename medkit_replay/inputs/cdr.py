@@ -174,13 +174,15 @@ class _Generator:
         if subdesc[0] == Nodetype.BASE:
             typ = subdesc[1][0]
             if typ == "string":
+                # A loop, not one block per element: the code stays small whatever the length.
+                # p is 4-aligned before the first element already, so each may align alike.
                 out.append(f"{ind}{value} = []")
-                for index in range(length):
-                    if index:
-                        out.extend(_align(4, ind))
-                    item = self.var("s")
-                    out.extend(self.string(item, ind))
-                    out.append(f"{ind}{value}.append({item})")
+                out.append(f"{ind}for _ in range({length}):")
+                inner = ind + "    "
+                out.extend(_align(4, inner))
+                item = self.var("s")
+                out.extend(self.string(item, inner))
+                out.append(f"{inner}{value}.append({item})")
                 return 1
             size = length * SIZEMAP[typ] if typ in SIZEMAP else 0
             out.append(

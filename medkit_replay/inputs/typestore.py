@@ -14,6 +14,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 
 from medkit_replay.inputs.cdr import light_decoder
+from medkit_replay.inputs.definition_bounds import check_definition
 from medkit_replay.inputs.selection import normalize_typename
 
 if TYPE_CHECKING:
@@ -271,12 +272,14 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
         types = types_from_definition(msgtype, definition)
         if msgtype not in types:
             raise DefinitionError(f"recorded definition does not define {msgtype}")
+        complete = _complete(types, base_typestore().fielddefs)
+        check_definition(msgtype, complete)  # before rosbags writes code proportional to it
         store = get_typestore(Stores.EMPTY)
-        store.register(_complete(types, base_typestore().fielddefs))
+        store.register(complete)
         store.get_msgdef(msgtype)  # compile now, so a bad definition fails here
     except ImportError:
         raise  # the environment, not the recording (numpy imported twice once emptied a replay)
-    except Exception as exc:  # DefinitionError, TypesysError, KeyError from rosbags
+    except Exception as exc:  # DefinitionError, DefinitionBoundsError, rosbags' own errors
         return str(exc)
     return ("recorded definition", store)
 
