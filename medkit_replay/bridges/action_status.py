@@ -7,12 +7,11 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, Self, cast
+from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.bridges.base import FaultReporter, MessageBridge, RequestList, passes_lists
-from medkit_replay.bridges.codes import action_code_prefix, action_fault_code
+from medkit_replay.bridges.codes import action_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
@@ -66,49 +65,6 @@ class ActionStatusBridgeConfig:
     local_filter: LocalFilterConfig = field(
         default_factory=lambda: LocalFilterConfig(enabled=False)
     )
-
-    @classmethod
-    def from_parameters(cls, params: Mapping[str, object]) -> tuple[Self, list[str]]:
-        """Read ``action_status_bridge`` parameters; returns the config and start-up warnings."""
-        read = ParameterReader(NODE_NAME, params)
-        severity = read.integer("aborted_severity", 2)
-        if not 0 <= severity <= 3:
-            read.warn(f"aborted_severity {severity} out of range [0,3]; clamping to ERROR")
-            severity = 2
-        canceled_is_fault = read.boolean("canceled_is_fault", False)
-        heal_on_succeeded = read.boolean("heal_on_succeeded", True)
-        rescan = read.double("rescan_period_sec", 2.0)
-        if rescan <= 0.0:
-            read.warn(f"rescan_period_sec {rescan:.3f} not positive; using 2.0")
-            rescan = 2.0
-        retry = read.double("retry_period_sec", 0.05)
-        if retry <= 0.0:
-            read.warn(f"retry_period_sec {retry:.3f} not positive; using 0.05")
-            retry = 0.05
-        prefix = action_code_prefix(read.string("code_prefix", "ACTION"))
-        if not prefix:
-            read.warn("code_prefix empty after normalization; using ACTION")
-            prefix = "ACTION"
-        exclude = read.strings("exclude_actions")
-        include_only = read.strings("include_only_actions")
-        capacity = read.integer("dedup_capacity", 4096)
-        if not 0 < capacity <= INT32_MAX:
-            read.warn(f"dedup_capacity {capacity} out of range; using 4096")
-            capacity = 4096
-        config = cls(
-            aborted_severity=severity,
-            canceled_is_fault=canceled_is_fault,
-            heal_on_succeeded=heal_on_succeeded,
-            rescan_period_sec=rescan,
-            retry_period_sec=retry,
-            code_prefix=prefix,
-            exclude_actions=exclude,
-            include_only_actions=include_only,
-            dedup_capacity=capacity,
-            # The node pre-declares the filter off unless the user set it (§1.3).
-            local_filter=read.local_filter(enabled_default=False),
-        )
-        return config, read.warnings
 
 
 def action_name_from_status_topic(topic: str) -> str:

@@ -6,13 +6,12 @@ Stateless per status; all debouncing is the per-source FaultReporter's LocalFilt
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, Self, cast
+from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.bridges.base import MessageBridge, ReporterCache, resolve_topic
 from medkit_replay.bridges.codes import upper_snake
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import Severity
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -26,7 +25,7 @@ LEVEL_OK = 0
 LEVEL_WARN = 1
 LEVEL_ERROR = 2
 LEVEL_STALE = 3
-_NAME_TO_CODE = "name_to_code."
+NAME_TO_CODE_PREFIX = "name_to_code."
 _MAX_PLANS = 4096
 
 Head = tuple[int, str, str, str]
@@ -69,35 +68,6 @@ class DiagnosticBridgeConfig:
     keyvalue_codes: tuple[str, ...] = ()
     name_to_code: Mapping[str, str] = field(default_factory=dict)
     local_filter: LocalFilterConfig = field(default_factory=LocalFilterConfig)
-
-    @classmethod
-    def from_parameters(cls, params: Mapping[str, object]) -> tuple[Self, list[str]]:
-        """Read ``diagnostic_bridge`` parameters; returns the config and start-up warnings."""
-        read = ParameterReader(NODE_NAME, params)
-        topic = read.string("diagnostics_topic", "/diagnostics")
-        auto_generate = read.boolean("auto_generate_codes", True)
-        use_hardware_id = read.boolean("use_hardware_id_as_source_id", False)
-        requested = read.integer("max_tracked_sources", 512)
-        tracked = min(max(requested, 1), INT32_MAX)
-        if tracked != requested:
-            read.warn(f"max_tracked_sources={requested} clamped to {tracked}")
-        keys = tuple(key for key in read.strings("keyvalue_codes") if key)
-        # Upstream scans the raw overrides: string values only, anything else is passed over.
-        mapping = {
-            name[len(_NAME_TO_CODE) :]: value
-            for name, value in params.items()
-            if name.startswith(_NAME_TO_CODE) and isinstance(value, str)
-        }
-        config = cls(
-            diagnostics_topic=topic,
-            auto_generate_codes=auto_generate,
-            use_hardware_id_as_source_id=use_hardware_id,
-            max_tracked_sources=tracked,
-            keyvalue_codes=keys,
-            name_to_code=mapping,
-            local_filter=read.local_filter(),
-        )
-        return config, read.warnings
 
 
 def map_to_severity(level: int) -> int | None:

@@ -5,9 +5,8 @@ Raise-only: a log line never heals anything, so the bridge sends FAILED requests
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, Self, cast
+from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.bridges.base import (
     MessageBridge,
@@ -16,14 +15,11 @@ from medkit_replay.bridges.base import (
     passes_lists,
     resolve_topic,
 )
-from medkit_replay.bridges.codes import log_code_prefix, log_fault_code
+from medkit_replay.bridges.codes import log_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import NS_PER_SEC, Severity
-from medkit_replay.parameters import INT32_MAX, ParameterReader
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
-
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.model import Origin
 
@@ -39,7 +35,7 @@ MEDKIT_STACK_LOGGERS = (
     "diagnostic_bridge",
     "action_status_bridge",
 )
-_DEFAULT_COOLDOWN_SEC = 5.0
+DEFAULT_COOLDOWN_SEC = 5.0
 
 
 class LogLike(Protocol):
@@ -60,45 +56,9 @@ class LogBridgeConfig:
     exclude_nodes: tuple[str, ...] = ()
     include_only_nodes: tuple[str, ...] = ()
     max_tracked_nodes: int = 512
-    report_cooldown_sec: float = _DEFAULT_COOLDOWN_SEC
+    report_cooldown_sec: float = DEFAULT_COOLDOWN_SEC
     exclude_medkit_stack: bool = True
     local_filter: LocalFilterConfig = field(default_factory=LocalFilterConfig)
-
-    @classmethod
-    def from_parameters(cls, params: Mapping[str, object]) -> tuple[Self, list[str]]:
-        """Read ``log_bridge`` parameters; returns the config and start-up warnings."""
-        read = ParameterReader(NODE_NAME, params)
-        topic = read.string("rosout_topic", "/rosout")
-        floor = read.integer("severity_floor", LEVEL_WARN)
-        if not 0 <= floor <= LEVEL_FATAL:
-            read.warn(f"severity_floor={floor} out of range [0,{LEVEL_FATAL}], clamping")
-            floor = min(max(floor, 0), LEVEL_FATAL)
-        prefix = log_code_prefix(read.string("code_prefix", "LOG"))
-        exclude = read.strings("exclude_nodes")
-        include_only = read.strings("include_only_nodes")
-        requested = read.integer("max_tracked_nodes", 512)
-        tracked = min(max(requested, 1), INT32_MAX)
-        if tracked != requested:
-            read.warn(f"max_tracked_nodes {requested} clamped to {tracked}")
-        cooldown = read.double("report_cooldown_sec", _DEFAULT_COOLDOWN_SEC)
-        if not math.isfinite(cooldown * NS_PER_SEC) or cooldown < 0.0:
-            read.warn(
-                f"report_cooldown_sec {cooldown:.2f} must be finite and >= 0. "
-                f"Using default {_DEFAULT_COOLDOWN_SEC}."
-            )
-            cooldown = _DEFAULT_COOLDOWN_SEC
-        config = cls(
-            rosout_topic=topic,
-            severity_floor=floor,
-            code_prefix=prefix,
-            exclude_nodes=exclude,
-            include_only_nodes=include_only,
-            max_tracked_nodes=tracked,
-            report_cooldown_sec=cooldown,
-            exclude_medkit_stack=read.boolean("exclude_medkit_stack", True),
-            local_filter=read.local_filter(),
-        )
-        return config, read.warnings
 
 
 def node_source_id(log_name: str) -> str:

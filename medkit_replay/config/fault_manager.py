@@ -11,12 +11,12 @@ from typing import TYPE_CHECKING
 from medkit_replay.config.correlation_file import load_correlation
 from medkit_replay.config.entity_thresholds_file import load_entity_thresholds
 from medkit_replay.config.nodes import located, values
+from medkit_replay.config.reader import INT64_MAX, ParameterReader, to_int32
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
-from medkit_replay.parameters import INT64_MAX, ParameterReader, to_int32
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams

@@ -11,9 +11,14 @@ from typing import TYPE_CHECKING
 from medkit_replay.bridges.action_status import ActionStatusBridgeConfig
 from medkit_replay.bridges.diagnostic import DiagnosticBridgeConfig
 from medkit_replay.bridges.log import LogBridgeConfig
+from medkit_replay.config.bridges import (
+    action_status_bridge_config,
+    diagnostic_bridge_config,
+    log_bridge_config,
+)
 from medkit_replay.config.nodes import located, values
+from medkit_replay.config.reader import ParameterReader
 from medkit_replay.errors import ConfigError
-from medkit_replay.parameters import ParameterReader
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import ParameterSet
@@ -61,16 +66,14 @@ def replay_options(params: ParameterSet) -> tuple[ReplayOptions, list[str]]:
     log_enabled, action_sources = located(own, read_own)
     diag_params = params.node("diagnostic_bridge")
     diagnostic, diag_warnings = located(
-        diag_params, lambda: DiagnosticBridgeConfig.from_parameters(values(diag_params))
+        diag_params, lambda: diagnostic_bridge_config(values(diag_params))
     )
     action_params = params.node("action_status_bridge")
     action, action_warnings = located(
-        action_params, lambda: ActionStatusBridgeConfig.from_parameters(values(action_params))
+        action_params, lambda: action_status_bridge_config(values(action_params))
     )
     log_params = params.node("log_bridge")
-    log, log_warnings = located(
-        log_params, lambda: LogBridgeConfig.from_parameters(values(log_params))
-    )
+    log, log_warnings = located(log_params, lambda: log_bridge_config(values(log_params)))
     warnings += diag_warnings + action_warnings + log_warnings
     return (
         ReplayOptions(

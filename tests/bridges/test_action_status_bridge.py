@@ -20,6 +20,7 @@ from medkit_replay.bridges.action_status import (
     server_fqn_from_endpoint,
     uuid_to_hex,
 )
+from medkit_replay.config.bridges import action_status_bridge_config
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
@@ -476,15 +477,13 @@ def test_goal_ids_do_not_gate_transitions() -> None:
 
 
 def test_local_filter_is_off_by_default() -> None:
-    config, _ = ActionStatusBridgeConfig.from_parameters({})
+    config, _ = action_status_bridge_config({})
     assert config.local_filter.enabled is False
     assert ActionStatusBridgeConfig().local_filter.enabled is False
 
 
 def test_local_filter_turned_on_throttles_passed_only() -> None:
-    config, _ = ActionStatusBridgeConfig.from_parameters(
-        {"fault_reporter.local_filtering.enabled": True}
-    )
+    config, _ = action_status_bridge_config({"fault_reporter.local_filtering.enabled": True})
     bridge = ActionStatusBridge(config)
     assert feed(bridge, "/nav", one(1, A), 1) == [raised("/nav", 1)]  # ERROR bypasses
     assert feed(bridge, "/nav", one(2, OK), 2) == []  # 1st PASSED held, heal still committed
@@ -522,7 +521,7 @@ def test_ai1_ai2_integration_raise_then_heal() -> None:
 
 
 def test_ai3_bad_parameters_are_warned_and_replaced() -> None:
-    config, warnings = ActionStatusBridgeConfig.from_parameters(
+    config, warnings = action_status_bridge_config(
         {"aborted_severity": 4294967298, "dedup_capacity": 4294967296}
     )
     assert (config.aborted_severity, config.dedup_capacity) == (2, 4096)
@@ -531,13 +530,13 @@ def test_ai3_bad_parameters_are_warned_and_replaced() -> None:
 
 
 def test_parameter_defaults() -> None:
-    config, warnings = ActionStatusBridgeConfig.from_parameters({})
+    config, warnings = action_status_bridge_config({})
     assert config == ActionStatusBridgeConfig()
     assert warnings == []
 
 
 def test_parameters_are_read_and_normalised() -> None:
-    config, warnings = ActionStatusBridgeConfig.from_parameters(
+    config, warnings = action_status_bridge_config(
         {
             "aborted_severity": 3,
             "canceled_is_fault": True,
@@ -574,14 +573,14 @@ def test_parameters_are_read_and_normalised() -> None:
 def test_out_of_range_parameters(
     params: dict[str, object], field: str, value: object, warning: str
 ) -> None:
-    config, warnings = ActionStatusBridgeConfig.from_parameters(params)
+    config, warnings = action_status_bridge_config(params)
     assert getattr(config, field) == value
     assert len(warnings) == 1
     assert warnings[0].startswith("action_status_bridge: " + warning)
 
 
 def test_longest_valid_dedup_capacity_is_kept() -> None:
-    config, warnings = ActionStatusBridgeConfig.from_parameters({"dedup_capacity": 2**31 - 1})
+    config, warnings = action_status_bridge_config({"dedup_capacity": 2**31 - 1})
     assert (config.dedup_capacity, warnings) == (2**31 - 1, [])
 
 
@@ -600,4 +599,4 @@ def test_longest_valid_dedup_capacity_is_kept() -> None:
 )
 def test_wrong_parameter_types_stop_the_node(name: str, value: object) -> None:
     with pytest.raises(ConfigError, match=f"'{name}'"):
-        ActionStatusBridgeConfig.from_parameters({name: value})
+        action_status_bridge_config({name: value})

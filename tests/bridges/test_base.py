@@ -25,10 +25,10 @@ from medkit_replay.bridges.base import (
     passes_lists,
     resolve_topic,
 )
+from medkit_replay.config.reader import ParameterReader, to_int32
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import EventType, ReportRequest
-from medkit_replay.parameters import ParameterReader, to_int32
 from tests.bridges.messages import (
     ABORTED,
     DIAGNOSTIC_ARRAY,

@@ -15,6 +15,7 @@ from medkit_replay.bridges.diagnostic import (
     is_ok_level,
     map_to_severity,
 )
+from medkit_replay.config.bridges import diagnostic_bridge_config
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
@@ -69,7 +70,7 @@ def passed(code: str, t_ns: int, source: str = BRIDGE_FQN) -> ReportRequest:
 
 
 def configured(params: Mapping[str, object]) -> DiagnosticBridge:
-    config, _ = DiagnosticBridgeConfig.from_parameters(params)
+    config, _ = diagnostic_bridge_config(params)
     return DiagnosticBridge(config)
 
 
@@ -223,7 +224,7 @@ def test_d20_reordered_attributes_still_use_configured_order() -> None:
 
 
 def test_d21_empty_configured_keys_are_ignored() -> None:
-    config, _ = DiagnosticBridgeConfig.from_parameters({"keyvalue_codes": ["", "", "code"]})
+    config, _ = diagnostic_bridge_config({"keyvalue_codes": ["", "", "code"]})
     assert config.keyvalue_codes == ("code",)
     motor = diag("/motor", WARN, values=[("", "EMPTY_KEY"), ("code", "MOTOR_FAULT")])
     assert DiagnosticBridge(config).map_to_fault_code(status(motor)) == "MOTOR_FAULT"
@@ -397,7 +398,7 @@ def test_relative_topic_and_source_follow_the_node_namespace() -> None:
 
 
 def test_parameter_defaults() -> None:
-    config, warnings = DiagnosticBridgeConfig.from_parameters({})
+    config, warnings = diagnostic_bridge_config({})
     assert config == DiagnosticBridgeConfig()
     assert config.local_filter == LocalFilterConfig()
     assert warnings == []
@@ -416,13 +417,13 @@ def test_parameter_defaults() -> None:
     ],
 )
 def test_max_tracked_sources_is_clamped(value: int, used: int, warning: str) -> None:
-    config, warnings = DiagnosticBridgeConfig.from_parameters({"max_tracked_sources": value})
+    config, warnings = diagnostic_bridge_config({"max_tracked_sources": value})
     assert config.max_tracked_sources == used
     assert warnings == [warning]
 
 
 def test_local_filter_parameters_are_narrowed_like_the_reporter() -> None:
-    config, warnings = DiagnosticBridgeConfig.from_parameters(
+    config, warnings = diagnostic_bridge_config(
         {
             "fault_reporter.local_filtering.default_threshold": 2**32 + 2,
             "fault_reporter.local_filtering.default_window_sec": 2.5,
@@ -451,4 +452,4 @@ def test_local_filter_parameters_are_narrowed_like_the_reporter() -> None:
 )
 def test_wrong_parameter_types_stop_the_node(name: str, value: object) -> None:
     with pytest.raises(ConfigError, match=f"'{name}'"):
-        DiagnosticBridgeConfig.from_parameters({name: value})
+        diagnostic_bridge_config({name: value})

@@ -16,6 +16,7 @@ from medkit_replay.bridges.log import (
     map_level_to_severity,
     node_source_id,
 )
+from medkit_replay.config.bridges import log_bridge_config
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
 from tests.bridges.messages import LOG, log
@@ -29,7 +30,7 @@ DEBUG, INFO, WARN, ERROR, FATAL = 10, 20, 30, 40, 50
 
 
 def configured(params: Mapping[str, object]) -> LogBridge:
-    config, _ = LogBridgeConfig.from_parameters(params)
+    config, _ = log_bridge_config(params)
     return LogBridge(config)
 
 
@@ -338,7 +339,7 @@ def test_li3_info_is_not_a_fault() -> None:
 
 
 def test_li4_bad_parameters_are_warned_and_replaced() -> None:
-    config, warnings = LogBridgeConfig.from_parameters(
+    config, warnings = log_bridge_config(
         {
             "max_tracked_nodes": 0,
             "report_cooldown_sec": float("nan"),
@@ -363,7 +364,7 @@ def test_wants_the_configured_topic_and_type() -> None:
 
 
 def test_parameter_defaults() -> None:
-    config, warnings = LogBridgeConfig.from_parameters({})
+    config, warnings = log_bridge_config({})
     assert config == LogBridgeConfig()
     assert warnings == []
 
@@ -377,7 +378,7 @@ def test_parameter_defaults() -> None:
     ],
 )
 def test_severity_floor_is_clamped(value: int, used: int, warning: str) -> None:
-    config, warnings = LogBridgeConfig.from_parameters({"severity_floor": value})
+    config, warnings = log_bridge_config({"severity_floor": value})
     assert (config.severity_floor, warnings) == (used, [warning])
 
 
@@ -389,13 +390,13 @@ def test_severity_floor_is_clamped(value: int, used: int, warning: str) -> None:
     ],
 )
 def test_report_cooldown_must_be_finite_and_not_negative(value: float, text: str) -> None:
-    config, warnings = LogBridgeConfig.from_parameters({"report_cooldown_sec": value})
+    config, warnings = log_bridge_config({"report_cooldown_sec": value})
     assert config.report_cooldown_sec == 5.0
     assert warnings == ["log_bridge: " + text]
 
 
 def test_max_tracked_nodes_upper_clamp_and_prefix_fallback() -> None:
-    config, warnings = LogBridgeConfig.from_parameters(
+    config, warnings = log_bridge_config(
         {"max_tracked_nodes": 2**40, "code_prefix": "!!!", "severity_floor": 40}
     )
     assert config.max_tracked_nodes == 2**31 - 1
@@ -417,4 +418,4 @@ def test_max_tracked_nodes_upper_clamp_and_prefix_fallback() -> None:
 )
 def test_wrong_parameter_types_stop_the_node(name: str, value: object) -> None:
     with pytest.raises(ConfigError, match=f"'{name}'"):
-        LogBridgeConfig.from_parameters({name: value})
+        log_bridge_config({name: value})
