@@ -14,7 +14,7 @@ import html
 import string
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import WARNING_CAP, clip, printable
+from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

@@ -11,8 +11,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import xml_text
 from medkit_replay.outputs.atomic import write_bytes_atomic
+from medkit_replay.text import xml_text
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:

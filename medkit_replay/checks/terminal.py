@@ -13,7 +13,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.checks.text import WARNING_CAP, clip, printable
+from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

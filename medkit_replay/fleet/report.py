@@ -14,7 +14,6 @@ import html
 import io
 import json
 import math
-import re
 from dataclasses import replace
 from typing import TYPE_CHECKING, TextIO
 
@@ -36,6 +35,7 @@ from rich.text import Text
 from medkit_replay.fleet.stats import codes_table, overview, runs_table
 from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.outputs.csv_safety import write_frame
+from medkit_replay.text import clip, printable, xml_text
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -54,24 +54,8 @@ MAX_CODE_ROWS = 20
 """Codes listed on the terminal."""
 MAX_ERROR_ROWS = 20
 """Failed recordings listed on the terminal."""
-_REORDERING = re.compile(r"[\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
-"""What would reorder or break the text of an HTML page: shown as escapes there."""
 MAX_CELL_CHARS = 2000
-"""Characters of a text cell in index.html; longer text ends in an ellipsis."""
-_UNPRINTABLE = re.compile(
-    r"[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069\ud800-\udfff]"
-)
-
-
-def _escape(match: re.Match[str]) -> str:
-    return f"\\u{ord(match.group()):04x}"
-
-
-def _literal(value: object) -> str:
-    """Text made safe for a terminal: control and bidirectional characters as escapes."""
-    return _UNPRINTABLE.sub(
-        lambda m: " " if m.group() in "\n\r\t" else f"\\u{ord(m.group()):04x}", str(value)
-    )
+"""Characters of a text cell in index.html; longer text is cut, saying how much."""
 
 
 def _csv_frame(frame: pd.DataFrame) -> pd.DataFrame:
@@ -253,9 +237,8 @@ def _number_cell(value: object, digits: int | None = None) -> str:
 
 
 def _text_cell(value: object, css: str = "") -> str:
-    text = "" if _is_missing(value) else _REORDERING.sub(_escape, str(value))
-    if len(text) > MAX_CELL_CHARS:
-        text = text[: MAX_CELL_CHARS - 1] + "…"  # runs.json keeps the whole text
+    # runs.json keeps the whole text
+    text = "" if _is_missing(value) else clip(xml_text(str(value)), MAX_CELL_CHARS)
     attr = f' class="{html.escape(css)}"' if css else ""
     return f"<td{attr}>{html.escape(text)}</td>"
 
@@ -415,7 +398,7 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
         statuses = dict(run.faults_by_status)
         span = run.span_ns
         cells: list[Text | str] = [
-            Text(_literal(run.path), style="" if run.ok else "red"),
+            Text(printable(str(run.path)), style="" if run.ok else "red"),
             _seconds(span / 1e9 if span is not None else None),
             f"{run.messages:,}" if run.messages is not None else "",
             *(
@@ -444,7 +427,7 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
             code_table.add_column(name, justify="right", no_wrap=True, min_width=len(name))
         for record in codes.head(MAX_CODE_ROWS).to_dict(orient="records"):
             code_table.add_row(
-                Text(_literal(record["fault_code"])),
+                Text(printable(str(record["fault_code"]))),
                 f"{record['runs_confirmed']:,}",
                 f"{record['share_of_runs']:.0%}",
                 f"{record['heals']:,}",
@@ -461,7 +444,7 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
         parts.append(Text("over budget:", style="bold red"))
         for run in over[:MAX_ERROR_ROWS]:
             rules = "; ".join(run.budget_failures)
-            parts.append(_indented(Text(f"{_literal(run.path)}: {_literal(rules)}")))
+            parts.append(_indented(Text(f"{printable(str(run.path))}: {printable(str(rules))}")))
         if len(over) > MAX_ERROR_ROWS:
             more = len(over) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -471,12 +454,12 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
         for run in failed[:MAX_ERROR_ROWS]:
             error = run.error or ""
             shown = error if error.startswith(run.path) else f"{run.path}: {error}"
-            parts.append(_indented(Text(_literal(shown))))
+            parts.append(_indented(Text(printable(str(shown)))))
         if len(failed) > MAX_ERROR_ROWS:
             more = len(failed) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
     if out_dir is not None:
-        parts.append(Text(f"report: {_literal(out_dir)}/ ({', '.join(FILES)})"))
+        parts.append(Text(f"report: {printable(str(out_dir))}/ ({', '.join(FILES)})"))
     return parts
 
 

@@ -15,7 +15,6 @@ from datetime import UTC, datetime
 from importlib import resources
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import WARNING_CAP, clip
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_tables import (
@@ -39,6 +38,7 @@ from medkit_replay.outputs.html_timeline import (
     severity_name,
 )
 from medkit_replay.result import EVENT_KINDS, STATUSES
+from medkit_replay.text import WARNING_CAP, clip
 
 if TYPE_CHECKING:
     from pathlib import Path

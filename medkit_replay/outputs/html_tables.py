@@ -11,8 +11,8 @@ import json
 from itertools import islice
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import clip, xml_text
 from medkit_replay.outputs.html_timeline import LIST_CAP, TEXT_CAP, severity_name
+from medkit_replay.text import clip, xml_text
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Iterator
@@ -30,7 +30,7 @@ Row = list[Cell]
 
 def esc(text: object) -> str:
     """Text escaped for HTML content and quoted attributes; control and bidirectional
-    characters, U+2028/9 and lone surrogates shown as escapes (``\\u202e``), see checks/text.py."""
+    characters, U+2028/9 and lone surrogates shown as escapes (``\\u202e``): see text.py."""
     return html.escape(xml_text(str(text)), quote=True)
 
 

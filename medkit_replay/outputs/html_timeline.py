@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from medkit_replay.checks.text import clip, xml_text
 from medkit_replay.model import NS_PER_SEC, Severity
 from medkit_replay.result import STATUSES
+from medkit_replay.text import clip, xml_text
 
 if TYPE_CHECKING:
     from medkit_replay.model import FaultSnapshot, NearMiss

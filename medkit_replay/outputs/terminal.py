@@ -3,7 +3,7 @@
 Reads only the Result; the one place that prints. Every string that comes from a recording, a
 script or a config (codes, descriptions, sources, paths, warnings) is shown literally: it goes into
 ``rich.text.Text`` objects or through ``rich.markup.escape``, never parsed as markup or emoji,
-with controls escaped (checks/text.py) and cut to a few hundred characters (the reports hold all).
+with controls escaped (text.py) and cut to a few hundred characters (the reports hold all).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.checks.text import WARNING_CAP, clip, printable
+from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -75,7 +75,7 @@ def correlation_disabled(warning: str) -> bool:
 
 
 def _show(value: object, limit: int = MAX_TEXT) -> str:
-    """Recorded text made safe for a terminal (checks/text.py ``printable``: line breaks and
+    """Recorded text made safe for a terminal (medkit_replay/text.py ``printable``: line breaks and
     tabs become spaces, control and bidirectional characters escapes such as ``\\x1b``), so
     nothing a recording holds can move the cursor, recolour or reorder the screen; cut at
     ``limit`` characters with an ellipsis and the count of characters left out."""

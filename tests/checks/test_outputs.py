@@ -19,7 +19,7 @@ from medkit_replay.checks.github import (
 )
 from medkit_replay.checks.junit import failure_message, junit_element, write_junit
 from medkit_replay.checks.terminal import conclusion, print_conclusion, print_run
-from medkit_replay.checks.text import printable, xml_text
+from medkit_replay.text import printable, xml_text
 from tests.checks.support import budget_text
 from tests.outputs.scripts import FakeTTY
 

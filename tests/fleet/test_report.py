@@ -143,7 +143,8 @@ def test_html_is_escaped_self_contained_and_sortable(tmp_path: Path) -> None:
     parser.feed(page)
     assert parser.tags.count("table") == 2
     assert ("class", "sortable") in parser.attrs
-    assert f"fleet/{NASTY}.jsonl" in parser.cells  # text comes back exactly
+    shown = NASTY.replace("\x1b", "\\x1b")  # controls shown as escapes, the rest exactly
+    assert f"fleet/{shown}.jsonl" in parser.cells
     assert "MOTOR_HOT:3; WIFI:1" in parser.cells
     assert ("class", "failed") in parser.attrs  # the broken run's row
 
@@ -163,7 +164,7 @@ def test_plain_summary(tmp_path: Path) -> None:
     assert "fleet: 3 recordings, 2 replayed, 1 failed" in flat
     assert "budget: 1 fail, 1 pass" in flat
     assert "[bold red]loud[/]" in flat  # shown literally, not as markup
-    assert "\\u001b[31m" in flat  # the escape character is shown, not sent
+    assert "\\x1b[31m" in flat  # the escape character is shown, not sent
     assert "over budget: fleet/<script>" in flat and ".jsonl: no motor faults;" in flat
     assert "not replayed: fleet/broken.mcap: <script>" in flat
     assert f"report: {tmp_path / 'rep'}/" in text.replace("\n", "")

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from medkit_replay.checks.text import printable, xml_text
+from medkit_replay.text import printable, xml_text
 from tests.checks.support import NAV2, mission, write_budget
 from tests.redteam.support import assert_one_line_error, run_limited, tree_listing
 

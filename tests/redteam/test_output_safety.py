@@ -19,7 +19,6 @@ import pyarrow.parquet as pq
 import pytest
 from mcap.reader import make_reader
 
-from medkit_replay.checks.text import clip
 from medkit_replay.outputs import terminal
 from medkit_replay.outputs.csv_safety import neutralise
 from medkit_replay.outputs.html import write_html
@@ -33,6 +32,7 @@ from medkit_replay.outputs.mcap_events import (
 from medkit_replay.outputs.parquet import INT64_MAX, INT64_MIN, clamped, write_parquet
 from medkit_replay.outputs.tables import write_csv
 from medkit_replay.pipeline import replay
+from medkit_replay.text import clip
 from tests.checks.support import write_budget
 from tests.inputs.builders import diag, write_bag, write_bare
 from tests.outputs.scripts import clear, report, write_script
