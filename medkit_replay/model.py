@@ -323,3 +323,39 @@ class EngineOutput:
     # Running counts, so that a summary never has to read spooled records back.
     event_counts: dict[str, int] = field(default_factory=dict)
     reports_accepted: int = 0
+
+
+Phase = Literal["prescan", "replay"]
+"""``prescan``: the pass over recorded ReportFault calls only; ``replay``: the replay itself."""
+
+
+@dataclass(frozen=True, slots=True)
+class Progress:
+    """How far a pass over the recording has got; given to ``replay(progress=...)``.
+
+    Attributes:
+        phase: which pass over the recording this is (see :data:`Phase`).
+        messages: messages read so far in this pass (selected topics only).
+        t_ns: bag time of the last message read (None before the first).
+        start_ns: first log time of the recording, when the inputs declare it up front.
+        end_ns: last log time of the recording, likewise (see ``Recording.span``).
+        done: the pass has read everything (sent once, last, for every pass).
+    """
+
+    phase: Phase
+    messages: int
+    t_ns: int | None
+    start_ns: int | None
+    end_ns: int | None
+    done: bool = False
+
+    @property
+    def fraction(self) -> float | None:
+        """Share of the recording's bag time read, 0.0 to 1.0; None when the span is unknown."""
+        if self.done:
+            return 1.0
+        if self.start_ns is None or self.end_ns is None or self.t_ns is None:
+            return None
+        if self.end_ns <= self.start_ns:
+            return 0.0
+        return min(max((self.t_ns - self.start_ns) / (self.end_ns - self.start_ns), 0.0), 1.0)

@@ -7,9 +7,8 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
 from medkit_replay.bridges.action_status import ActionStatusBridge
 from medkit_replay.bridges.diagnostic import DiagnosticBridge
@@ -34,6 +33,8 @@ from medkit_replay.model import (
     EngineOutput,
     FaultEvent,
     InputSummary,
+    Phase,
+    Progress,
     ReportRecord,
     ReportRequest,
     Transition,
@@ -56,6 +57,8 @@ if TYPE_CHECKING:
     from medkit_replay.inputs import Recording
     from medkit_replay.model import Origin
 
+__all__ = ["PROGRESS_EVERY", "Phase", "Progress", "replay"]
+
 Request = ReportRequest | ClearRequest
 _Handler = Callable[[int, str, object, "ReportSink"], None]
 _BRIDGE_ORIGINS = ("diagnostic_bridge", "action_status_bridge", "log_bridge")
@@ -65,41 +68,6 @@ PROGRESS_EVERY = 2048
 
 SETTLE_EVERY = 1024
 """Messages between two spills of the records the fast path piled up (bounds memory)."""
-
-Phase = Literal["prescan", "replay"]
-"""``prescan``: the pass over recorded ReportFault calls only; ``replay``: the replay itself."""
-
-
-@dataclass(frozen=True, slots=True)
-class Progress:
-    """How far a pass over the recording has got; given to ``replay(progress=...)``.
-
-    Attributes:
-        phase: which pass over the recording this is (see :data:`Phase`).
-        messages: messages read so far in this pass (selected topics only).
-        t_ns: bag time of the last message read (None before the first).
-        start_ns: first log time of the recording, when the inputs declare it up front.
-        end_ns: last log time of the recording, likewise (see ``Recording.span``).
-        done: the pass has read everything (sent once, last, for every pass).
-    """
-
-    phase: Phase
-    messages: int
-    t_ns: int | None
-    start_ns: int | None
-    end_ns: int | None
-    done: bool = False
-
-    @property
-    def fraction(self) -> float | None:
-        """Share of the recording's bag time read, 0.0 to 1.0; None when the span is unknown."""
-        if self.done:
-            return 1.0
-        if self.start_ns is None or self.end_ns is None or self.t_ns is None:
-            return None
-        if self.end_ns <= self.start_ns:
-            return 0.0
-        return min(max((self.t_ns - self.start_ns) / (self.end_ns - self.start_ns), 0.0), 1.0)
 
 
 class _Meter:

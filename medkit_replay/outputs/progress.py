@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
     from rich.progress import Task
 
-    from medkit_replay.pipeline import Phase, Progress as ReplayProgress
+    from medkit_replay.model import Phase, Progress as ReplayProgress
 
 PHASE_LABELS: dict[str, str] = {"prescan": "service calls", "replay": "replaying"}
 """What each pass of the replay is called on the bar."""
