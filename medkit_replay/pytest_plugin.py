@@ -537,8 +537,7 @@ def assert_matches_golden(
             "  run pytest with --update-golden to write it from this run"
         )
     with _keeping_modules():
-        from medkit_replay.commands.diff import read_report  # noqa: PLC0415  # only when used
-        from medkit_replay.diffing import diff_reports, render_diff, tolerance_ns  # noqa: PLC0415
+        from medkit_replay.diffing import diff_reports, read_report, render_diff, tolerance_ns  # noqa: PLC0415  # only when used
         from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
 
         diff = diff_reports(

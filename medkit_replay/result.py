@@ -24,6 +24,8 @@ if TYPE_CHECKING:
         Transition,
     )
 
+REPORT_SCHEMA = "medkit-replay/report/v1"
+"""Schema of the JSON report a Result is written as (``outputs/json_report.py``)."""
 STATUSES = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
 EVENT_KINDS = ("fault_confirmed", "fault_updated", "fault_cleared")
 

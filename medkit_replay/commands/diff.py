@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import io
 import json
-import os
-import re
 import shutil
 import sys
 from contextlib import nullcontext
@@ -21,10 +19,9 @@ from rich.console import Console
 from rich.text import Text
 
 from medkit_replay.commands import config_option
-from medkit_replay.diffing import diff_renderable, diff_reports, tolerance_ns
-from medkit_replay.errors import InputError, MedkitReplayError
-from medkit_replay.files import MAX_REPORT_FILE_BYTES, FileRefusedError, open_regular
-from medkit_replay.inputs.jsonl import JsonRefusedError, loads_strict, locate_refusal
+from medkit_replay.diffing import diff_renderable, diff_reports, read_report, tolerance_ns
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.files import open_regular
 from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.outputs.json_report import to_report, write_json
 from medkit_replay.outputs.progress import progress_bar
@@ -34,92 +31,14 @@ if TYPE_CHECKING:
     from medkit_replay.diffing import ReportDiff
     from medkit_replay.result import Result
 
+# read_report is listed while tests/redteam/test_input_errors.py still imports it from here;
+# its home is medkit_replay.diffing.
+__all__ = ["diff", "is_report_path", "read_report"]
+
 
 def is_report_path(path: Path) -> bool:
     """A ``.json`` file is read as a report; anything else is a recording or script to replay."""
     return path.suffix.lower() == ".json"
-
-
-def read_report(path: Path) -> dict[str, object]:
-    """A JSON report from a file (checked by the diff, which names the file when it is not one).
-
-    Strict and bounded: a regular file of at most MAX_REPORT_FILE_BYTES, UTF-8, strict JSON
-    (no NaN or Infinity, no number too long, no lone surrogate); each refusal is one line.
-    """
-    shown = str(path)
-    data = _report_bytes(path)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise InputError(
-            f"not a JSON report (not UTF-8 text at byte {err.start:,})",
-            path=shown,
-            line=data.count(b"\n", 0, err.start) + 1,
-        ) from None
-    except MemoryError:
-        raise InputError(_TOO_BIG.format(len(data)), path=shown) from None
-    del data
-    try:
-        report = loads_strict(text)
-    except json.JSONDecodeError as err:
-        raise InputError(f"not valid JSON: {err.msg}", path=shown, line=err.lineno) from None
-    except JsonRefusedError as err:
-        where, problem = locate_refusal(text, sys.get_int_max_str_digits())
-        raise InputError(f"not valid JSON: {problem or err}", path=shown, line=where) from None
-    except MemoryError:
-        raise InputError(_TOO_BIG.format(len(text)), path=shown) from None
-    if not isinstance(report, dict):
-        raise InputError("not a medkit-replay report (not a JSON object)", path=shown)
-    if _MAYBE_SURROGATE.search(text) is not None:
-        where, problem = locate_refusal(text, sys.get_int_max_str_digits())
-        if problem is not None:
-            raise InputError(f"not valid text: {problem}", path=shown, line=where)
-    return report
-
-
-_TOO_BIG = "a report of {:,} bytes is too large to load in the memory available"
-_MAYBE_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
-
-
-def _report_bytes(path: Path) -> bytes:
-    """The file's bytes: a regular file within the bound, refused at once when it cannot be
-    a report (it does not start with '{'), so a huge or endless file is never read whole."""
-    try:
-        with open_regular(path) as stream:
-            size = os.fstat(stream.fileno()).st_size
-            if size > MAX_REPORT_FILE_BYTES:
-                raise InputError(
-                    f"a report of {size:,} bytes is larger than {MAX_REPORT_FILE_BYTES:,} bytes",
-                    path=str(path),
-                )
-            head = stream.read(_HEAD_BYTES)
-            if head.lstrip(b" \t\r\n")[:1] not in (b"{", b""):
-                raise InputError(
-                    "not a JSON report (it does not start with '{')", path=str(path), line=1
-                )
-            try:
-                # read(n) allocates n bytes first: ask for what the file holds, plus one byte
-                # to notice a file that grew past the bound.
-                wanted = min(size, MAX_REPORT_FILE_BYTES) + 1 - len(head)
-                data = head + stream.read(max(wanted, 1))
-            except MemoryError:
-                raise InputError(_TOO_BIG.format(size), path=str(path)) from None
-            if len(data) > MAX_REPORT_FILE_BYTES:  # it grew while being read
-                raise InputError(
-                    f"a report larger than {MAX_REPORT_FILE_BYTES:,} bytes", path=str(path)
-                )
-            return data
-    except FileNotFoundError:
-        raise InputError("no such report", path=str(path)) from None
-    except IsADirectoryError:
-        raise InputError("is a directory, not a JSON report", path=str(path)) from None
-    except FileRefusedError as err:
-        raise InputError(f"cannot read report: {err}", path=str(path)) from None
-    except OSError as err:
-        raise InputError(f"cannot read report: {err.strerror}", path=str(path)) from None
-
-
-_HEAD_BYTES = 64 * 1024
 
 
 class _Side:

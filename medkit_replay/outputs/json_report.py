@@ -10,6 +10,8 @@ import io
 import json
 from typing import IO, TYPE_CHECKING
 
+from medkit_replay.result import REPORT_SCHEMA
+
 if TYPE_CHECKING:
     from medkit_replay.model import (
         ClearRecord,
@@ -27,7 +29,6 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-SCHEMA = "medkit-replay/report/v1"
 JsonObject = dict[str, object]
 
 
@@ -169,7 +170,7 @@ def _sections(result: Result) -> list[tuple[str, object]]:
     """The report's keys in the contract's order; long lists stay lazy."""
     summary = result.summary
     return [
-        ("schema", SCHEMA),
+        ("schema", REPORT_SCHEMA),
         ("tool_version", result.tool_version),
         ("inputs", [input_dict(i) for i in result.inputs]),
         ("faults", [fault_dict(f) for f in result.faults]),
