@@ -31,6 +31,8 @@ except ImportError:
 MAGIC = b"\x89MCAP0\r\n"
 SECOND = 1_000_000_000
 MEMORY = 1536 * MIB
+HELD_KIB = 700 * 1024
+"""Peak RSS no bomb may reach: it counts the forked test process too; the bombs need GiBs."""
 
 
 # -- a raw MCAP writer: every field under the test's control ------------------------------
@@ -204,7 +206,7 @@ def test_chunk_expanding_past_its_declared_size_is_cut_at_it(
     (warning,) = [w for w in report["warnings"] if "chunk at byte" in w]
     assert str(path) in warning
     assert "expands past its declared 1000 bytes; its messages are lost" in warning
-    assert outcome.peak_rss_kib < 400 * 1024  # the expansion was never held
+    assert outcome.peak_rss_kib < HELD_KIB  # the expansion was never held
 
 
 def with_crc(record_bytes: bytes, crc: int) -> bytes:
@@ -313,7 +315,7 @@ def test_fixed_array_of_a_billion_bytes_costs_nothing_before_its_data(tmp_path: 
     cost(outcome, "definition uint8[1000000000]")
     report = report_of(outcome)
     assert fault_codes(report) == ["MOTOR_A", "MOTOR_C"]  # the bundled definition fits them
-    assert outcome.peak_rss_kib < 400 * 1024
+    assert outcome.peak_rss_kib < HELD_KIB
 
 
 def test_sequence_length_past_the_payload_allocates_nothing(tmp_path: Path) -> None:
@@ -328,7 +330,7 @@ def test_sequence_length_past_the_payload_allocates_nothing(tmp_path: Path) -> N
     (warning,) = report["warnings"]
     assert "1 messages on /diagnostics cannot be decoded" in warning
     assert "sequence length 4294967295" in warning
-    assert outcome.peak_rss_kib < 400 * 1024
+    assert outcome.peak_rss_kib < HELD_KIB
 
 
 # -- 4. log times past int64 -------------------------------------------------------------------
