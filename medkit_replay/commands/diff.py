@@ -19,10 +19,12 @@ from rich.console import Console
 from rich.text import Text
 
 from medkit_replay.commands import config_option
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.config.referenced import config_files
 from medkit_replay.diffing import diff_renderable, diff_reports, read_report, tolerance_ns
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import open_regular
-from medkit_replay.outputs.atomic import atomic_binary
+from medkit_replay.outputs.atomic import atomic_binary, refuse_overlap, write_text_atomic
 from medkit_replay.outputs.json_report import to_report, write_json
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.pipeline import replay
@@ -30,10 +32,6 @@ from medkit_replay.pipeline import replay
 if TYPE_CHECKING:
     from medkit_replay.diffing import ReportDiff
     from medkit_replay.result import Result
-
-# read_report is listed while tests/redteam/test_input_errors.py still imports it from here;
-# its home is medkit_replay.diffing.
-__all__ = ["diff", "is_report_path", "read_report"]
 
 
 def is_report_path(path: Path) -> bool:
@@ -144,6 +142,8 @@ def diff(
       medkit-replay diff baseline.json mission/ --config robot_params.yaml --update
     """
     tolerance = tolerance_ns(time_tolerance)
+    if json_out is not None and json_out != "-":
+        refuse_overlap([baseline, current, *config_files(configs)], [("--json", Path(json_out))])
     if update and not is_report_path(baseline):
         raise MedkitReplayError(
             "--update rewrites a baseline report: BASELINE must be a .json report",
@@ -173,15 +173,22 @@ def diff(
     document = result.to_json()
     if update:
         document["baseline_updated"] = True
+    text = json.dumps(document, indent=2, ensure_ascii=True) + "\n"
     if json_out == "-":
-        sys.stdout.write(json.dumps(document, indent=2, ensure_ascii=True) + "\n")
+        with standard_output("the diff"):
+            sys.stdout.write(text)
     elif json_out is not None:
         try:
-            with Path(json_out).open("w", encoding="utf-8") as stream:
-                stream.write(json.dumps(document, indent=2, ensure_ascii=True) + "\n")
+            write_text_atomic(Path(json_out), text)
         except OSError as err:
-            raise MedkitReplayError(f"cannot write diff: {err.strerror}", path=json_out) from None
+            raise MedkitReplayError(
+                f"cannot write diff: {err.strerror or err}", path=json_out
+            ) from None
     if not quiet:
-        _print(result, sys.stderr if json_out == "-" else sys.stdout, notes)
+        if json_out == "-":
+            _print(result, sys.stderr, notes)
+        else:
+            with standard_output("the diff"):
+                _print(result, sys.stdout, notes)
     if not result.equal and not update:
         ctx.exit(1)

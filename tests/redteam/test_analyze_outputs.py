@@ -184,3 +184,31 @@ def test_a_full_standard_output_is_one_line(workspace: Path, extra: list[str], w
     assert stderr.splitlines() == [
         f"medkit-replay: error: cannot write {what} to standard output: No space left on device"
     ]
+
+
+def test_the_diff_is_never_written_over_a_side_or_a_config(workspace: Path) -> None:
+    base = workspace / "base.json"
+    made = run_limited(["analyze", "run.jsonl", "--json", base, "--quiet"], cwd=workspace)
+    assert made.status == 0, made.stderr
+    before = hashes(workspace)
+    for target in ("base.json", "run.jsonl", "fault_manager.yaml", "correlation.yaml"):
+        outcome = run_limited(
+            ["diff", "base.json", "run.jsonl", "--config", "fault_manager.yaml", "--json", target],
+            cwd=workspace,
+        )
+        assert_one_line_error(outcome, "--json", "refusing to write over")
+    assert hashes(workspace) == before
+
+
+def test_a_diff_too_large_for_the_disk_leaves_the_old_file(workspace: Path) -> None:
+    made = run_limited(["analyze", "run.jsonl", "--json", "base.json", "--quiet"], cwd=workspace)
+    assert made.status == 0, made.stderr
+    (workspace / "d.json").write_text("old\n", encoding="utf-8")
+    outcome = run_limited(
+        ["diff", "base.json", "bag", "--json", "d.json", "--quiet"],
+        cwd=workspace,
+        file_size=512,
+    )
+    assert_one_line_error(outcome, "d.json", "cannot write diff")
+    assert (workspace / "d.json").read_text(encoding="utf-8") == "old\n"
+    assert sorted(p.name for p in workspace.iterdir() if p.name.startswith(".")) == []

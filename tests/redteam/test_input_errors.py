@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from medkit_replay.commands.diff import read_report
+from medkit_replay.diffing import read_report
 from medkit_replay.errors import InputError
 from tests.inputs.builders import diag, log, write_bag
 from tests.redteam.support import (
