@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from enum import IntEnum
 from operator import attrgetter
-from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar
+from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar, get_args
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -19,6 +19,11 @@ Origin = Literal[
 Cause = Literal["report", "auto_confirm", "clear", "auto_clear"]
 EventKind = Literal["fault_confirmed", "fault_updated", "fault_cleared"]
 Status = Literal["PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED"]
+
+STATUSES: tuple[Status, ...] = get_args(Status)
+"""Every fault status, in the order the debounce moves through them."""
+EVENT_KINDS: tuple[EventKind, ...] = get_args(EventKind)
+"""Every FaultEvent type upstream publishes."""
 
 _R = TypeVar("_R")
 
@@ -94,6 +99,12 @@ class Severity(IntEnum):
     WARN = 1
     ERROR = 2
     CRITICAL = 3
+
+
+SEVERITY_NAMES: tuple[str, ...] = tuple(severity.name for severity in Severity)
+"""How every output names a fault's severity 0-3 (ros2_medkit_msgs/Fault's SEVERITY_* names).
+Upstream's correlation engine spells 1 ``WARNING``; that spelling stays where it reaches the
+report (a cluster's ``representative_severity``), as the contract shows."""
 
 
 class EventType(IntEnum):

@@ -401,10 +401,10 @@ def _result(
         for code in sorted(manager.storage.near_misses, key=lambda c: c.encode("utf-8"))
         for entry in manager.storage.near_misses[code]
     ]
-    by_status = dict.fromkeys(STATUSES, 0)
+    by_status: dict[str, int] = dict.fromkeys(STATUSES, 0)
     for fault in faults:
         by_status[fault.status] += 1
-    by_event = {kind: output.event_counts.get(kind, 0) for kind in EVENT_KINDS}
+    by_event: dict[str, int] = {kind: output.event_counts.get(kind, 0) for kind in EVENT_KINDS}
     accepted = output.reports_accepted
     summary = Summary(
         messages_read=messages,

@@ -38,6 +38,9 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.model import NS_PER_SEC
+from medkit_replay.text import seconds
+
 if TYPE_CHECKING:
     from collections.abc import Iterator, Sequence
     from types import ModuleType
@@ -45,7 +48,6 @@ if TYPE_CHECKING:
     from medkit_replay.model import FaultEvent, Transition
     from medkit_replay.result import Result
 
-NS_PER_SEC = 1_000_000_000
 MAX_TIMELINE_ROWS = 40
 """Rows of a fault timeline shown in a failure (runs of ``fault_updated`` count as one)."""
 MAX_FAULTS_SHOWN = 5
@@ -215,10 +217,6 @@ def recording_start_ns(result: Result) -> int:
     return min(starts, default=0)
 
 
-def _seconds(t_ns: int, origin_ns: int) -> str:
-    return f"{(t_ns - origin_ns) / NS_PER_SEC:.3f}"
-
-
 @dataclass(slots=True)
 class _Row:
     t_ns: int
@@ -312,10 +310,10 @@ def fault_timeline(result: Result, fault_code: str, *, marked: Sequence[Transiti
         if row.change.startswith("... "):
             table.append(("", "", row.change, "", "", ""))
             continue
-        t = _seconds(row.t_ns, origin)
+        t = seconds(row.t_ns - origin)
         event = row.event
         if row.repeats > 1 and row.last_t_ns is not None:
-            t += f"-{_seconds(row.last_t_ns, origin)}"
+            t += f"-{seconds(row.last_t_ns - origin)}"
             event += f" x{row.repeats}"
         table.append((row.mark, t, row.change, row.cause, row.source, event))
     widths = [max(len(line[i]) for line in table) for i in range(len(table[0]))]
@@ -402,7 +400,7 @@ def assert_confirmed(
     fault = result.fault(fault_code)
     status = fault.status if fault is not None else "unknown"
     if confirmations:
-        times = ", ".join(f"{_seconds(t.t_ns, origin)} s" for t in confirmations)
+        times = ", ".join(f"{seconds(t.t_ns - origin)} s" for t in confirmations)
         actual = f"it was confirmed at {times} (status at the end: {status})"
     else:
         actual = f"it was never confirmed (status at the end: {status})"
@@ -446,7 +444,7 @@ def assert_not_confirmed(
     lines[0] += f"; {len(offending)} was" if len(offending) == 1 else f"; {len(offending)} were"
     for code, confirmations in offending.items():
         fault = result.fault(code)
-        times = ", ".join(f"{_seconds(t.t_ns, origin)} s" for t in confirmations)
+        times = ", ".join(f"{seconds(t.t_ns - origin)} s" for t in confirmations)
         status = fault.status if fault is not None else "unknown"
         lines.append(f"  {_clean(code)}: confirmed at {times} (status at the end: {status})")
     for code, confirmations in list(offending.items())[:MAX_FAULTS_SHOWN]:

@@ -8,6 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from medkit_replay import model
+
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
@@ -26,8 +28,7 @@ if TYPE_CHECKING:
 
 REPORT_SCHEMA = "medkit-replay/report/v1"
 """Schema of the JSON report a Result is written as (``outputs/json_report.py``)."""
-STATUSES = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
-EVENT_KINDS = ("fault_confirmed", "fault_updated", "fault_cleared")
+STATUSES, EVENT_KINDS = model.STATUSES, model.EVENT_KINDS  # re-exported for outputs and checks
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 
+from medkit_replay.model import NS_PER_SEC, SEVERITY_NAMES
+
 _BIDI = "\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
 _UNPRINTABLE = re.compile(f"[\\x00-\\x1f\\x7f-\\x9f\\u2028\\u2029{_BIDI}\\ud800-\\udfff]")
 # Besides what XML 1.0 forbids (NUL, ESC, lone surrogates): C1 controls, line and paragraph
@@ -52,3 +54,13 @@ def clip(text: str, limit: int) -> str:
     if len(text) <= limit:
         return text
     return f"{text[:limit]}... (+{len(text) - limit:,} characters)"
+
+
+def seconds(ns: float) -> str:
+    """Nanoseconds as seconds with millisecond digits (``12.345``), as every output shows time."""
+    return f"{ns / NS_PER_SEC:.3f}"
+
+
+def severity_name(severity: int) -> str:
+    """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; any other number as itself."""
+    return SEVERITY_NAMES[severity] if 0 <= severity < len(SEVERITY_NAMES) else str(severity)

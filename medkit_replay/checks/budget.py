@@ -19,6 +19,8 @@ from yaml.constructor import ConstructorError, SafeConstructor
 
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
+from medkit_replay.model import SEVERITY_NAMES
+from medkit_replay.text import severity_name
 from medkit_replay.wildcards import Wildcard, compile_wildcard
 from medkit_replay.yaml_bounds import (
     YamlBoundsError,
@@ -36,7 +38,7 @@ BUDGET_VERSION = 1
 SCHEMA_FILE = Path(__file__).with_name("budget.schema.json")
 """The budget format as a JSON Schema (draft 2020-12)."""
 
-SEVERITIES = ("INFO", "WARN", "ERROR", "CRITICAL")
+SEVERITIES = SEVERITY_NAMES
 """Severity names in ros2_medkit_msgs/Fault's order (their index is the severity number)."""
 
 KINDS = (
@@ -232,11 +234,6 @@ def seconds_text(value: float) -> str:
     return f"{value:.9f}".rstrip("0").rstrip(".")
 
 
-def severity_text(severity: int) -> str:
-    """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; other numbers as themselves."""
-    return SEVERITIES[severity] if 0 <= severity < len(SEVERITIES) else str(severity)
-
-
 def _listing(items: Sequence[object]) -> str:
     shown = ", ".join(str(i) for i in items[:_MAX_SHOWN])
     return shown + (f" +{len(items) - _MAX_SHOWN} more" if len(items) > _MAX_SHOWN else "")
@@ -246,7 +243,7 @@ def default_name(spec: RuleSpec) -> str:
     """A rule's name when the budget gives none: what it asks, in a few words."""
     match spec:
         case MaxConfirmed(limits=limits):
-            return "most confirmed: " + ", ".join(f"{severity_text(s)} {n}" for s, n in limits)
+            return "most confirmed: " + ", ".join(f"{severity_name(s)} {n}" for s, n in limits)
         case NeverConfirm(patterns=patterns):
             return f"never confirmed: {_listing(patterns)}"
         case AllowConfirm(patterns=patterns):

@@ -23,8 +23,8 @@ from medkit_replay.checks.budget import (
     ResolvedByEnd,
     matches_any,
     seconds_text,
-    severity_text,
 )
+from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Sequence
@@ -51,7 +51,7 @@ class Offender:
     @property
     def at(self) -> str:
         """``78.372 s`` from the recording's start, or an empty string when there is no time."""
-        return f"{self.offset_ns / 1e9:.3f} s" if self.offset_ns is not None else ""
+        return f"{seconds(self.offset_ns)} s" if self.offset_ns is not None else ""
 
     def text(self) -> str:
         """``CODE at 78.372 s: detail`` on one line."""
@@ -194,7 +194,7 @@ class _Facts:
 
     def at(self, t_ns: int) -> str:
         offset = self.offset(t_ns)
-        return f"{offset / 1e9:.3f} s" if offset is not None else "?"
+        return f"{seconds(offset)} s" if offset is not None else "?"
 
 
 def _add_member(seen: dict[str, list[str]], cluster_id: str, code: str) -> None:
@@ -294,7 +294,7 @@ def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: _Facts) -> Verdict:
         facts.offender(
             code,
             facts.confirmations[code][0],
-            f"{severity_text(_severity_of(facts, code))}, confirmed but not allowed to",
+            f"{severity_name(_severity_of(facts, code))}, confirmed but not allowed to",
         )
         for code in confirmed
         if matches_any(code, spec.patterns) is None
@@ -348,7 +348,7 @@ def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: _Facts) -> Verd
             length = until - since
             if length > limit_ns:
                 detail = (
-                    f"CONFIRMED for {length / 1e9:.3f} s, at most {seconds_text(limit)} s "
+                    f"CONFIRMED for {seconds(length)} s, at most {seconds_text(limit)} s "
                     f"allowed ({pattern})"
                 )
                 if still:
@@ -364,7 +364,7 @@ def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: _Facts) -> Verd
     if longest_seen is None:
         return Verdict(rule, True, "no fault matching the patterns confirmed")
     code = longest_seen[1]
-    return Verdict(rule, True, f"within limits; longest: {code} for {longest_seen[0] / 1e9:.3f} s")
+    return Verdict(rule, True, f"within limits; longest: {code} for {seconds(longest_seen[0])} s")
 
 
 def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: _Facts) -> Verdict:

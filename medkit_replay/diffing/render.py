@@ -16,6 +16,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.text import seconds
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -89,7 +90,7 @@ class _Clock:
     def at(self, t_ns: object) -> str:
         if not isinstance(t_ns, int):
             return "-"
-        return f"{(t_ns - self.origin_ns) / NS_PER_SEC:.3f} s"
+        return f"{seconds(t_ns - self.origin_ns)} s"
 
 
 def _what(difference: Difference) -> str:
@@ -134,7 +135,7 @@ def _cells(difference: Difference, clock: _Clock) -> tuple[str, str]:
 
 
 def _headline(diff: ReportDiff) -> Text:
-    tolerance = f"time tolerance {diff.time_tolerance_ns / NS_PER_SEC:.3f} s"
+    tolerance = f"time tolerance {seconds(diff.time_tolerance_ns)} s"
     if diff.equal:
         return Text.assemble(("reports are equal", "bold green"), f" ({tolerance})")
     counts = [(k, n) for k, n in diff.counts().items() if n]

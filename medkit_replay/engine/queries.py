@@ -9,14 +9,14 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Generic, TypeVar
 
 from medkit_replay.engine.storage import FaultRecord
-from medkit_replay.model import FaultSnapshot, Status
+from medkit_replay.model import STATUSES, FaultSnapshot, Status
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
 FaultT = TypeVar("FaultT", FaultRecord, FaultSnapshot)
 
-KNOWN_STATUSES: tuple[Status, ...] = ("PREFAILED", "PREPASSED", "CONFIRMED", "HEALED", "CLEARED")
+KNOWN_STATUSES: tuple[Status, ...] = STATUSES
 EMPTY_ENTITY_ID_ERROR = "entity_id cannot be empty"
 
 

@@ -35,10 +35,9 @@ from medkit_replay.outputs.html_timeline import (
     Span,
     build_lanes,
     page_data,
-    severity_name,
 )
 from medkit_replay.result import EVENT_KINDS, STATUSES
-from medkit_replay.text import WARNING_CAP, clip
+from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -94,7 +93,7 @@ def _header(result: Result, span: Span) -> str:
         recorded = "nothing was read"
     else:
         recorded = (
-            f"{s.duration_ns / 1e9:.3f} s of bag time, from {s.start_ns} ns{_utc(s.start_ns)} to "
+            f"{seconds(s.duration_ns)} s of bag time, from {s.start_ns} ns{_utc(s.start_ns)} to "
             f"{s.end_ns} ns (times below are seconds from the start)"
         )
     names = listed(i.path for i in result.inputs) or "no input"
@@ -132,7 +131,7 @@ def _header(result: Result, span: Span) -> str:
     )
     events = " · ".join(f"{k.removeprefix('fault_')} {s.events.get(k, 0)}" for k in EVENT_KINDS)
     cards = [
-        ("Bag time", f"{s.duration_ns / 1e9:.3f} s", f"{s.messages_read:,} messages read"),
+        ("Bag time", f"{seconds(s.duration_ns)} s", f"{s.messages_read:,} messages read"),
         (
             "Reports",
             f"{s.reports:,}",
@@ -218,7 +217,7 @@ def _timeline(result: Result, lanes: list[Lane], span: Span) -> str:
     )
     ticks = "".join(
         f'<div class="tick" style="left:{_pct(100 * k / AXIS_TICKS)}"><span>'
-        f"{span.duration_ns * k / AXIS_TICKS / 1e9:.3f}</span></div>"
+        f"{seconds(span.duration_ns * k / AXIS_TICKS)}</span></div>"
         for k in range(AXIS_TICKS + 1)
     )
     rows = "".join(_row(i, lane, span) for i, lane in enumerate(lanes))
@@ -241,7 +240,7 @@ def _timeline(result: Result, lanes: list[Lane], span: Span) -> str:
         f'</span></h2><div class="tl-toolbar"><button type="button" data-zoom="in" title="zoom in">'
         f'+</button><button type="button" data-zoom="out" title="zoom out">&minus;</button>'
         f'<button type="button" data-zoom="reset">reset</button><span id="tl-range">'
-        f"0.000 \u2013 {span.duration_ns / 1e9:.3f} s</span>"
+        f"0.000 \u2013 {seconds(span.duration_ns)} s</span>"
         f'<input type="search" id="tl-filter" placeholder="filter faults…" aria-label="filter '
         f'faults"><span class="hint">wheel on the axis or Ctrl+wheel: zoom · drag on the axis: '
         f"zoom to a range · click a row: debounce counter and near misses</span></div>"
@@ -309,7 +308,7 @@ def _correlation(result: Result, span: Span) -> str:
             f'{esc(c.representative_code)}">{esc(c.representative_code)}</span> '
             f"({esc(short(c.representative_severity))})</dd><dt>members</dt><dd>{c.count}<ul>{members}"
             f"</ul></dd><dt>span</dt><dd>{esc(span.label(c.first_at_ns))} \u2013 "
-            f"{esc(span.label(c.last_at_ns))} ({(c.last_at_ns - c.first_at_ns) / 1e9:.3f} s)"
+            f"{esc(span.label(c.last_at_ns))} ({seconds(c.last_at_ns - c.first_at_ns)} s)"
             f"</dd></dl></div>"
         )
     clusters = "".join(cards) or '<p class="empty">No active cluster at the end.</p>'

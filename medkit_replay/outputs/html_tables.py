@@ -11,8 +11,8 @@ import json
 from itertools import islice
 from typing import TYPE_CHECKING
 
-from medkit_replay.outputs.html_timeline import LIST_CAP, TEXT_CAP, severity_name
-from medkit_replay.text import clip, xml_text
+from medkit_replay.outputs.html_timeline import LIST_CAP, TEXT_CAP
+from medkit_replay.text import clip, seconds, severity_name, xml_text
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Iterator
@@ -63,7 +63,7 @@ def num(value: int) -> Cell:
 
 def when(span: Span, t_ns: int) -> Cell:
     """A bag-time cell: seconds since the recording's start, sorted by nanoseconds."""
-    return (f"{(t_ns - span.start_ns) / 1e9:.3f}", t_ns - span.start_ns)
+    return (f"{seconds(t_ns - span.start_ns)}", t_ns - span.start_ns)
 
 
 def table(

@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import NS_PER_SEC, Severity
+from medkit_replay.model import NS_PER_SEC
 from medkit_replay.result import STATUSES
-from medkit_replay.text import clip, xml_text
+from medkit_replay.text import clip, seconds, severity_name, xml_text
 
 if TYPE_CHECKING:
     from medkit_replay.model import FaultSnapshot, NearMiss
@@ -32,7 +32,7 @@ LIST_CAP = 20  # items of one recorded list (sources, clusters, codes) shown
 # Most serious first: binned bands show the worst status of their interval.
 STATUS_RANK = {"CLEARED": 0, "HEALED": 1, "PREPASSED": 2, "PREFAILED": 3, "CONFIRMED": 4}
 RANK_STATUS = {rank: status for status, rank in STATUS_RANK.items()}
-STATUS_INDEX = {"PREFAILED": 0, "PREPASSED": 1, "CONFIRMED": 2, "HEALED": 3, "CLEARED": 4}
+STATUS_INDEX: dict[str, int] = {status: index for index, status in enumerate(STATUSES)}
 MARKER_ORDER = {"fault_confirmed": 0, "fault_updated": 1, "fault_cleared": 2, "clear": 3}
 
 # t_s, counter, confirmation threshold, healing threshold, PASSED (0/1), status index
@@ -50,14 +50,6 @@ def shown_list(values: tuple[str, ...]) -> list[str | None]:
     if len(values) > LIST_CAP:
         items.append(f"+{len(values) - LIST_CAP:,} more")
     return items
-
-
-def severity_name(severity: int) -> str:
-    """INFO, WARN, ERROR, CRITICAL, or the raw number."""
-    try:
-        return Severity(severity).name
-    except ValueError:
-        return str(severity)
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,7 +79,7 @@ class Span:
 
     def label(self, t_ns: int) -> str:
         """Seconds since the start as text, to the millisecond."""
-        return f"{(t_ns - self.start_ns) / NS_PER_SEC:.3f} s"
+        return f"{seconds(t_ns - self.start_ns)} s"
 
     def percent(self, t_ns: int) -> float:
         """Position in the span in percent, clamped to [0, 100]."""

@@ -22,7 +22,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.text import WARNING_CAP, clip, printable
+from medkit_replay.text import WARNING_CAP, clip, printable, seconds, severity_name
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -33,7 +33,6 @@ if TYPE_CHECKING:
 SHOWN_STATUSES = ("CONFIRMED", "HEALED", "CLEARED")
 """The faults the table lists: those that reached a verdict."""
 
-SEVERITY_NAMES = ("INFO", "WARN", "ERROR", "CRITICAL")
 STATUS_STYLES = {
     "CONFIRMED": "bold red",
     "HEALED": "green",
@@ -62,11 +61,6 @@ EPOCH_FLOOR_NS = 10**18
 """Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
 _CORRELATION_ERROR = re.compile(r"correlation config error", re.IGNORECASE)
-
-
-def severity_name(severity: int) -> str:
-    """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; out-of-range values as their number."""
-    return SEVERITY_NAMES[severity] if 0 <= severity < len(SEVERITY_NAMES) else str(severity)
 
 
 def correlation_disabled(warning: str) -> bool:
@@ -115,16 +109,16 @@ def _hms(ns: int) -> tuple[str, int, int, int, int]:
     sign = "-" if ns < 0 else ""
     hours, rest = divmod(abs(ns) // 1_000_000, 3_600_000)
     minutes, rest = divmod(rest, 60_000)
-    seconds, millis = divmod(rest, 1000)
-    return sign, hours, minutes, seconds, millis
+    secs, millis = divmod(rest, 1000)
+    return sign, hours, minutes, secs, millis
 
 
 def _duration(ns: int) -> str:
     if ns < 1000 * 10**9:
-        return f"{ns / 1e9:.3f} s"
-    _, hours, minutes, seconds, millis = _hms(ns)
-    text = f"{minutes} min {seconds:02d}.{millis:03d} s"
-    return f"{hours} h {minutes:02d} min {seconds:02d}.{millis:03d} s" if hours else text
+        return f"{seconds(ns)} s"
+    _, hours, minutes, secs, millis = _hms(ns)
+    text = f"{minutes} min {secs:02d}.{millis:03d} s"
+    return f"{hours} h {minutes:02d} min {secs:02d}.{millis:03d} s" if hours else text
 
 
 class _Clock:
@@ -140,9 +134,9 @@ class _Clock:
 
     def offset(self, t_ns: int) -> str:
         if not self.long:
-            return f"{(t_ns - self.origin_ns) / 1e9:.3f}"
-        sign, hours, minutes, seconds, millis = _hms(t_ns - self.origin_ns)
-        return f"{sign}{hours}:{minutes:02d}:{seconds:02d}.{millis:03d}"
+            return f"{seconds(t_ns - self.origin_ns)}"
+        sign, hours, minutes, secs, millis = _hms(t_ns - self.origin_ns)
+        return f"{sign}{hours}:{minutes:02d}:{secs:02d}.{millis:03d}"
 
 
 def _start_text(t_ns: int) -> str:
@@ -153,7 +147,7 @@ def _start_text(t_ns: int) -> str:
             return f"t = {t_ns // 10**9:,} s"
         stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
         return f"{stamp}.{(t_ns % 10**9) // 10**6:03d} UTC"
-    return f"t = {t_ns / 1e9:.3f} s"
+    return f"t = {seconds(t_ns)} s"
 
 
 def _header(result: Result, clock: _Clock | None, end_ns: int | None) -> list[RenderableType]:

@@ -14,10 +14,10 @@ from medkit_replay.cli import main
 from medkit_replay.outputs.terminal import (
     print_summary,
     render_summary,
-    severity_name,
     summary_renderable,
 )
 from medkit_replay.pipeline import replay
+from medkit_replay.text import severity_name
 from tests.outputs.scripts import SEC, T0, FakeTTY, healing_config, mission, report, write_script
 
 if TYPE_CHECKING:

@@ -15,13 +15,14 @@ from medkit_replay.engine.correlation.rules import (
 )
 from medkit_replay.model import NS_PER_MS, Cluster, MutedFault
 
-SEVERITY_NAMES = {0: "INFO", 1: "WARNING", 2: "ERROR", 3: "CRITICAL"}
+CORRELATION_SEVERITIES = {0: "INFO", 1: "WARNING", 2: "ERROR", 3: "CRITICAL"}
+"""Upstream's severity_to_string: the spelling its correlation engine and ClusterInfo use."""
 _RANKS = {"CRITICAL": 3, "3": 3, "ERROR": 2, "2": 2, "WARN": 1, "WARNING": 1, "1": 1}
 
 
 def severity_name(severity: int) -> str:
     """The string the fault manager passes to the engine for a request severity."""
-    return SEVERITY_NAMES.get(severity, "UNKNOWN")
+    return CORRELATION_SEVERITIES.get(severity, "UNKNOWN")
 
 
 def severity_rank(severity: str) -> int:
