@@ -8,155 +8,75 @@ from __future__ import annotations
 
 import io
 import json
-from typing import IO, TYPE_CHECKING
+from dataclasses import fields, is_dataclass
+from operator import attrgetter
+from typing import IO, TYPE_CHECKING, Any, cast, get_args, get_origin, get_type_hints
 
+from medkit_replay.model import (
+    ClearRecord,
+    Cluster,
+    FaultEvent,
+    FaultSnapshot,
+    InputSummary,
+    MutedFault,
+    NearMiss,
+    ReportRecord,
+    Transition,
+)
 from medkit_replay.result import REPORT_SCHEMA
 
 if TYPE_CHECKING:
-    from medkit_replay.model import (
-        ClearRecord,
-        Cluster,
-        FaultEvent,
-        FaultSnapshot,
-        InputSummary,
-        MutedFault,
-        NearMiss,
-        ReportRecord,
-        Transition,
-    )
-    from medkit_replay.result import Result
+    from collections.abc import Callable, Iterable
 
-if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from medkit_replay.result import Result
 
 JsonObject = dict[str, object]
 
 
-def fault_dict(fault: FaultSnapshot) -> JsonObject:
-    """A fault as the report lists it."""
-    return {
-        "fault_code": fault.fault_code,
-        "severity": fault.severity,
-        "description": fault.description,
-        "first_occurred_ns": fault.first_occurred_ns,
-        "last_occurred_ns": fault.last_occurred_ns,
-        "last_passed_ns": fault.last_passed_ns,
-        "occurrence_count": fault.occurrence_count,
-        "status": fault.status,
-        "reporting_sources": list(fault.reporting_sources),
-        "muted": fault.muted,
-        "root_cause_code": fault.root_cause_code,
-        "cluster_ids": list(fault.cluster_ids),
-    }
+def record_dict(cls: type[Any]) -> Callable[[Any], JsonObject]:
+    """The report's form of a record class: its fields in declaration order, tuples as lists,
+    nested records as objects. Built once per class from the class itself."""
+    names = tuple(field.name for field in fields(cls))
+    hints = get_type_hints(cls)
+    convert: list[tuple[str, Callable[[Any], object]]] = []
+    for name in names:
+        hint = hints[name]
+        if get_origin(hint) is tuple:
+            item = get_args(hint)[0]
+            if is_dataclass(item):
+                convert.append((name, _each(record_dict(cast("type[Any]", item)))))
+            else:
+                convert.append((name, list))
+        elif is_dataclass(hint):
+            convert.append((name, record_dict(cast("type[Any]", hint))))
+    get = attrgetter(*names)
+
+    def as_dict(record: Any) -> JsonObject:
+        built = dict(zip(names, get(record), strict=True))
+        for name, function in convert:
+            built[name] = function(built[name])
+        return built
+
+    as_dict.__doc__ = f"A {cls.__name__} as the report lists it."
+    return as_dict
 
 
-def event_dict(event: FaultEvent) -> JsonObject:
-    """A FaultEvent as the report lists it."""
-    return {
-        "t_ns": event.t_ns,
-        "event_type": event.event_type,
-        "fault": fault_dict(event.fault),
-        "auto_cleared_codes": list(event.auto_cleared_codes),
-    }
+def _each(as_dict: Callable[[Any], JsonObject]) -> Callable[[Any], object]:
+    def each(items: Iterable[Any]) -> list[JsonObject]:
+        return [as_dict(item) for item in items]
+
+    return each
 
 
-def transition_dict(transition: Transition) -> JsonObject:
-    """A status change."""
-    return {
-        "t_ns": transition.t_ns,
-        "fault_code": transition.fault_code,
-        "from_status": transition.from_status,
-        "to_status": transition.to_status,
-        "cause": transition.cause,
-        "source_id": transition.source_id,
-    }
-
-
-def report_dict(report: ReportRecord) -> JsonObject:
-    """A ReportFault request and its verdict."""
-    return {
-        "t_ns": report.t_ns,
-        "origin": report.origin,
-        "topic": report.topic,
-        "fault_code": report.fault_code,
-        "event_type": report.event_type,
-        "severity": report.severity,
-        "description": report.description,
-        "source_id": report.source_id,
-        "accepted": report.accepted,
-        "reject_reason": report.reject_reason,
-        "status": report.status,
-        "debounce_counter": report.debounce_counter,
-        "confirmation_threshold": report.confirmation_threshold,
-        "healing_threshold": report.healing_threshold,
-        "withheld_event": report.withheld_event,
-    }
-
-
-def clear_dict(clear: ClearRecord) -> JsonObject:
-    """A ClearFault request and its response."""
-    return {
-        "t_ns": clear.t_ns,
-        "fault_code": clear.fault_code,
-        "skip_correlation_auto_clear": clear.skip_correlation_auto_clear,
-        "success": clear.success,
-        "message": clear.message,
-        "auto_cleared_codes": list(clear.auto_cleared_codes),
-    }
-
-
-def muted_dict(muted: MutedFault) -> JsonObject:
-    """A MutedFaultInfo."""
-    return {
-        "fault_code": muted.fault_code,
-        "root_cause_code": muted.root_cause_code,
-        "rule_id": muted.rule_id,
-        "delay_ms": muted.delay_ms,
-    }
-
-
-def cluster_dict(cluster: Cluster) -> JsonObject:
-    """A ClusterInfo with bag times."""
-    return {
-        "cluster_id": cluster.cluster_id,
-        "rule_id": cluster.rule_id,
-        "rule_name": cluster.rule_name,
-        "label": cluster.label,
-        "representative_code": cluster.representative_code,
-        "representative_severity": cluster.representative_severity,
-        "fault_codes": list(cluster.fault_codes),
-        "count": cluster.count,
-        "first_at_ns": cluster.first_at_ns,
-        "last_at_ns": cluster.last_at_ns,
-    }
-
-
-def near_miss_dict(near_miss: NearMiss) -> JsonObject:
-    """A near-miss record."""
-    return {
-        "fault_code": near_miss.fault_code,
-        "t_ns": near_miss.t_ns,
-        "debounce_counter": near_miss.debounce_counter,
-        "confirmation_threshold": near_miss.confirmation_threshold,
-        "severity": near_miss.severity,
-        "source_id": near_miss.source_id,
-        "resulting_status": near_miss.resulting_status,
-    }
-
-
-def input_dict(summary: InputSummary) -> JsonObject:
-    """One input file and the topics it held."""
-    return {
-        "path": summary.path,
-        "storage": summary.storage,
-        "start_ns": summary.start_ns,
-        "end_ns": summary.end_ns,
-        "message_count": summary.message_count,
-        "topics": [
-            {"topic": t.topic, "type": t.type, "role": t.role, "messages": t.messages}
-            for t in summary.topics
-        ],
-    }
+fault_dict = record_dict(FaultSnapshot)
+event_dict = record_dict(FaultEvent)
+transition_dict = record_dict(Transition)
+report_dict = record_dict(ReportRecord)
+clear_dict = record_dict(ClearRecord)
+muted_dict = record_dict(MutedFault)
+cluster_dict = record_dict(Cluster)
+near_miss_dict = record_dict(NearMiss)
+input_dict = record_dict(InputSummary)
 
 
 class _Rows:

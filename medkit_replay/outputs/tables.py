@@ -6,10 +6,20 @@ CSV cells that a spreadsheet would run as formulas are neutralised (outputs/csv_
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from medkit_replay.model import (
+    ClearRecord,
+    Cluster,
+    FaultSnapshot,
+    MutedFault,
+    NearMiss,
+    ReportRecord,
+    Transition,
+)
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.csv_safety import write_frame
 from medkit_replay.outputs.json_report import (
@@ -28,81 +38,34 @@ if TYPE_CHECKING:
 
     from medkit_replay.result import Result
 
+
+def _columns(cls: type[Any]) -> list[str]:
+    return [field.name for field in fields(cls)]
+
+
+EVENT_COLUMNS = [
+    "t_ns",
+    "event_type",
+    "fault_code",
+    "status",
+    "severity",
+    "occurrence_count",
+    "reporting_sources",
+    "muted",
+    "auto_cleared_codes",
+]
+"""The events table: each FaultEvent with the fields of its fault a table reader filters on."""
 TABLE_COLUMNS: dict[str, list[str]] = {
-    "faults": [
-        "fault_code",
-        "severity",
-        "description",
-        "first_occurred_ns",
-        "last_occurred_ns",
-        "last_passed_ns",
-        "occurrence_count",
-        "status",
-        "reporting_sources",
-        "muted",
-        "root_cause_code",
-        "cluster_ids",
-    ],
-    "events": [
-        "t_ns",
-        "event_type",
-        "fault_code",
-        "status",
-        "severity",
-        "occurrence_count",
-        "reporting_sources",
-        "muted",
-        "auto_cleared_codes",
-    ],
-    "transitions": ["t_ns", "fault_code", "from_status", "to_status", "cause", "source_id"],
-    "reports": [
-        "t_ns",
-        "origin",
-        "topic",
-        "fault_code",
-        "event_type",
-        "severity",
-        "description",
-        "source_id",
-        "accepted",
-        "reject_reason",
-        "status",
-        "debounce_counter",
-        "confirmation_threshold",
-        "healing_threshold",
-        "withheld_event",
-    ],
-    "clears": [
-        "t_ns",
-        "fault_code",
-        "skip_correlation_auto_clear",
-        "success",
-        "message",
-        "auto_cleared_codes",
-    ],
-    "muted_faults": ["fault_code", "root_cause_code", "rule_id", "delay_ms"],
-    "clusters": [
-        "cluster_id",
-        "rule_id",
-        "rule_name",
-        "label",
-        "representative_code",
-        "representative_severity",
-        "fault_codes",
-        "count",
-        "first_at_ns",
-        "last_at_ns",
-    ],
-    "near_misses": [
-        "fault_code",
-        "t_ns",
-        "debounce_counter",
-        "confirmation_threshold",
-        "severity",
-        "source_id",
-        "resulting_status",
-    ],
+    "faults": _columns(FaultSnapshot),
+    "events": EVENT_COLUMNS,
+    "transitions": _columns(Transition),
+    "reports": _columns(ReportRecord),
+    "clears": _columns(ClearRecord),
+    "muted_faults": _columns(MutedFault),
+    "clusters": _columns(Cluster),
+    "near_misses": _columns(NearMiss),
 }
+"""Every table's columns: the record's fields in declaration order, as the JSON report has them."""
 
 
 def _event_row(event: dict[str, object]) -> dict[str, object]:
