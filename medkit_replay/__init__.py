@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.errors import CheckFailed, ConfigError, InputError, MedkitReplayError
+from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -17,7 +17,6 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 __all__ = [
-    "CheckFailed",
     "ConfigError",
     "InputError",
     "MedkitReplayError",

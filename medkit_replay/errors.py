@@ -51,12 +51,6 @@ class ConfigError(MedkitReplayError):
         super().__init__(problem, path=path, line=line)
 
 
-class CheckFailed(MedkitReplayError):  # noqa: N818  # reads as a verdict, like click's Abort
-    """A check (budget, diff) did not hold (exit 1)."""
-
-    exit_code: ClassVar[int] = 1
-
-
 class Terminated(BaseException):  # like KeyboardInterrupt: not an Exception
     """A termination signal (SIGTERM, SIGHUP) turned into an exception that unwinds the stack.
 

@@ -12,7 +12,6 @@ import sys
 import pytest
 
 from medkit_replay.bridges import (
-    BRIDGES,
     ActionStatusBridge,
     Bridge,
     DiagnosticBridge,
@@ -40,14 +39,6 @@ from tests.bridges.messages import (
     log,
     one,
 )
-
-
-def test_registry_maps_upstream_node_names_to_bridges() -> None:
-    assert dict(BRIDGES) == {
-        "action_status_bridge": ActionStatusBridge,
-        "diagnostic_bridge": DiagnosticBridge,
-        "log_bridge": LogBridge,
-    }
 
 
 def test_every_bridge_fits_the_protocol_and_claims_its_own_input() -> None:
