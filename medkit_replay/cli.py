@@ -16,7 +16,7 @@ from medkit_replay.commands.diff import diff
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.errors import MedkitReplayError, Terminated
-from medkit_replay.outputs.terminal import echo
+from medkit_replay.outputs.console import echo
 from medkit_replay.version import __version__
 
 

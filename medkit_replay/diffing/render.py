@@ -5,17 +5,17 @@ The only diffing module that imports rich: a headline, then one row per differen
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from rich import box
-from rich.console import Console, Group
+from rich.console import Group
 from rich.padding import Padding
 from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.outputs.console import plain_text
 from medkit_replay.text import seconds
 
 if TYPE_CHECKING:
@@ -203,16 +203,4 @@ def diff_renderable(diff: ReportDiff) -> Group:
 
 def render_diff(diff: ReportDiff, width: int = 100) -> str:
     """The human output as plain text (no ANSI codes) laid out for ``width`` columns."""
-    buffer = io.StringIO()
-    console = Console(
-        file=buffer,
-        width=width,
-        force_terminal=False,
-        color_system=None,
-        no_color=True,
-        markup=False,
-        emoji=False,
-        highlight=False,
-    )
-    console.print(diff_renderable(diff), crop=False)
-    return "\n".join(line.rstrip(" ") for line in buffer.getvalue().split("\n"))
+    return plain_text(diff_renderable(diff), width, crop=False)

@@ -8,20 +8,20 @@ with controls escaped (text.py) and cut to a few hundred characters (the reports
 
 from __future__ import annotations
 
-import io
 import re
 import sys
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, TextIO
 
 from rich import box
-from rich.console import Console, Group
+from rich.console import Group
 from rich.markup import escape
 from rich.padding import Padding
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from medkit_replay.outputs.console import draw, literal_console, plain_text
 from medkit_replay.text import WARNING_CAP, clip, printable, seconds, severity_name
 
 if TYPE_CHECKING:
@@ -52,11 +52,6 @@ MAX_TEXT = 200
 """Characters of a source, a code, a cluster id shown (a valid fault code has at most 128)."""
 MAX_WARNING = WARNING_CAP
 """Characters of a warning (or a path) shown; the JSON report has it whole."""
-DEFAULT_WIDTH = 80
-"""Columns when ``COLUMNS`` and the terminal say nothing usable (0, negative, not a number)."""
-WIDTH_RANGE = (72, 1000)
-"""Widths outside this range (``COLUMNS=1``, ``COLUMNS=100000``) are brought back into it:
-the faults table needs some 72 columns to show every column."""
 EPOCH_FLOOR_NS = 10**18
 """Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
@@ -386,53 +381,9 @@ def summary_renderable(result: Result, width: int = 80) -> Group:
     return Group(*parts)
 
 
-def summary_console(
-    stream: TextIO, *, width: int | None = None, force_terminal: bool | None = None
-) -> Console:
-    """A console for the summary: no markup, emoji or highlighting of plain strings, so that
-    recorded text prints as it is; terminal, colour and width detected unless given (a
-    detected width that is not usable, ``COLUMNS=0``, becomes 80: see :func:`usable_width`)."""
-    console = Console(
-        file=stream,
-        width=width,
-        force_terminal=force_terminal,
-        markup=False,
-        emoji=False,
-        highlight=False,
-    )
-    if width is None:
-        console.width = usable_width(console.width)
-    return console
-
-
-def usable_width(detected: int) -> int:
-    """A width to lay the summary out for: DEFAULT_WIDTH for 0 or less (``COLUMNS=0``), else
-    ``detected`` brought into WIDTH_RANGE (``COLUMNS=1`` would print a letter per line)."""
-    if detected <= 0:
-        return DEFAULT_WIDTH
-    return min(max(detected, WIDTH_RANGE[0]), WIDTH_RANGE[1])
-
-
 def render_summary(result: Result, width: int = 80) -> str:
     """The summary as plain text (no ANSI codes) laid out for ``width`` columns."""
-    buffer = io.StringIO()
-    console = Console(
-        file=buffer,
-        width=width,
-        force_terminal=False,
-        color_system=None,
-        no_color=True,
-        markup=False,
-        emoji=False,
-        highlight=False,
-    )
-    console.print(summary_renderable(result, width))
-    return _strip_trailing(buffer.getvalue())
-
-
-def _strip_trailing(text: str) -> str:
-    """Drop the spaces rich pads lines with (they only clutter logs and files)."""
-    return "\n".join(line.rstrip(" ") for line in text.split("\n"))
+    return plain_text(summary_renderable(result, width), width)
 
 
 def print_summary(result: Result, stream: TextIO | None = None) -> None:
@@ -441,17 +392,5 @@ def print_summary(result: Result, stream: TextIO | None = None) -> None:
     Colour and the terminal's width when the stream is a terminal; plain text at 80 columns
     (or ``COLUMNS``) otherwise. ``NO_COLOR`` and ``FORCE_COLOR`` are honoured, as rich does.
     """
-    out = stream or sys.stdout
-    console = summary_console(out)
-    renderable = summary_renderable(result, console.width)
-    if console.is_terminal:
-        console.print(renderable)
-        return
-    with console.capture() as capture:
-        console.print(renderable)
-    out.write(_strip_trailing(capture.get()))
-
-
-def echo(text: str, stream: TextIO | None = None) -> None:
-    """Write text to a stream (standard output by default)."""
-    print(text, end="", file=stream or sys.stdout)
+    console = literal_console(stream or sys.stdout)
+    draw(console, summary_renderable(result, console.width))

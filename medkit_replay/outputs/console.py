@@ -1,0 +1,85 @@
+"""rich consoles for what medkit-replay prints: recorded text shown literally, widths made usable.
+
+Every human output (summary, diff, fleet summary) is drawn or turned into plain text here.
+"""
+
+from __future__ import annotations
+
+import io
+import sys
+from typing import TYPE_CHECKING, TextIO
+
+from rich.console import Console
+
+if TYPE_CHECKING:
+    from rich.console import RenderableType
+
+DEFAULT_WIDTH = 80
+"""Columns used when the detected width is unusable (``COLUMNS=0``)."""
+WIDTH_RANGE = (72, 1000)
+"""Narrowest and widest layouts (``COLUMNS=1`` would print a letter per line; the summary's
+faults table needs some 72 columns to show every column)."""
+
+
+def usable_width(detected: int) -> int:
+    """A width to lay output out for: DEFAULT_WIDTH for 0 or less (``COLUMNS=0``), else
+    ``detected`` brought into WIDTH_RANGE."""
+    if detected <= 0:
+        return DEFAULT_WIDTH
+    return min(max(detected, WIDTH_RANGE[0]), WIDTH_RANGE[1])
+
+
+def literal_console(
+    stream: TextIO, *, width: int | None = None, force_terminal: bool | None = None
+) -> Console:
+    """A console with no markup, emoji or highlighting of plain strings, so that recorded text
+    prints as it is; terminal, colour and width detected unless given (a detected width that is
+    not usable becomes one that is: see :func:`usable_width`)."""
+    console = Console(
+        file=stream,
+        width=width,
+        force_terminal=force_terminal,
+        markup=False,
+        emoji=False,
+        highlight=False,
+    )
+    if width is None:
+        console.width = usable_width(console.width)
+    return console
+
+
+def plain_text(renderable: RenderableType, width: int, *, crop: bool = True) -> str:
+    """``renderable`` as plain text (no ANSI codes) laid out for ``width`` columns."""
+    buffer = io.StringIO()
+    console = Console(
+        file=buffer,
+        width=width,
+        force_terminal=False,
+        color_system=None,
+        no_color=True,
+        markup=False,
+        emoji=False,
+        highlight=False,
+    )
+    console.print(renderable, crop=crop)
+    return strip_trailing(buffer.getvalue())
+
+
+def strip_trailing(text: str) -> str:
+    """Drop the spaces rich pads lines with (they only clutter logs and files)."""
+    return "\n".join(line.rstrip(" ") for line in text.split("\n"))
+
+
+def draw(console: Console, renderable: RenderableType) -> None:
+    """Print on a terminal as rich does; elsewhere the same text without padding spaces."""
+    if console.is_terminal:
+        console.print(renderable)
+        return
+    with console.capture() as capture:
+        console.print(renderable)
+    console.file.write(strip_trailing(capture.get()))
+
+
+def echo(text: str, stream: TextIO | None = None) -> None:
+    """Write text to a stream (standard output by default)."""
+    print(text, end="", file=stream or sys.stdout)
