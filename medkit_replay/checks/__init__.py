@@ -1,13 +1,15 @@
 """Fault budgets: the budget file (model and strict parser) and the verdicts on a replay's Result.
 
-``budget`` reads a budget YAML into plain values; ``evaluate`` turns a Result and a budget into
-one Verdict per rule; ``terminal``, ``junit`` and ``github`` write verdicts out. The format is
-documented in docs/budgets.md; ``budget.schema.json`` beside this file is its JSON Schema.
+``budget`` is the budget as plain values and ``budget_file`` reads a budget YAML into them;
+``evaluate`` turns a Result and a budget into one Verdict per rule; ``terminal``, ``junit`` and
+``github`` write verdicts out. The format is documented in docs/budgets.md;
+``budget.schema.json`` beside this file is its JSON Schema.
 """
 
 from __future__ import annotations
 
-from medkit_replay.checks.budget import Budget, Rule, load_budget, parse_budget
+from medkit_replay.checks.budget import Budget, Rule
+from medkit_replay.checks.budget_file import load_budget, parse_budget
 from medkit_replay.checks.evaluate import CheckRun, Offender, Verdict, check_run, evaluate
 
 __all__ = [

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.checks.budget import load_budget
+from medkit_replay.checks.budget_file import load_budget
 from medkit_replay.checks.evaluate import CheckRun, check_run, unreadable_run
 from medkit_replay.checks.github import step_summary, workflow_commands
 from medkit_replay.checks.junit import write_junit

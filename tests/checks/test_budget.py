@@ -11,7 +11,6 @@ import yaml
 
 from medkit_replay.checks.budget import (
     KINDS,
-    SCHEMA_FILE,
     AllowConfirm,
     ExpectCluster,
     ExpectConfirmed,
@@ -23,9 +22,8 @@ from medkit_replay.checks.budget import (
     Pattern,
     ResolvedByEnd,
     Window,
-    load_budget,
-    parse_budget,
 )
+from medkit_replay.checks.budget_file import SCHEMA_FILE, load_budget, parse_budget
 from medkit_replay.errors import ConfigError
 from tests.checks.support import BUDGETS, ROOT, budget_text
 
