@@ -24,39 +24,18 @@ from medkit_replay.checks.budget import (
     matches_any,
     seconds_text,
 )
+from medkit_replay.checks.facts import Facts, Offender
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Sequence
 
     from medkit_replay.checks.budget import Budget, Rule
-    from medkit_replay.model import FaultSnapshot
+    from medkit_replay.checks.facts import FormedCluster
     from medkit_replay.result import Result
 
 RESOLVED = ("HEALED", "CLEARED")
 """Final statuses that count as healed or cleared by the end."""
-
-
-@dataclass(frozen=True, slots=True)
-class Offender:
-    """A fault that makes a rule fail, with the time it did so."""
-
-    fault_code: str
-    t_ns: int | None
-    """Bag time of the offence (a confirmation, the start of a stretch, the last occurrence)."""
-    offset_ns: int | None
-    """The same time from the recording's start."""
-    detail: str
-
-    @property
-    def at(self) -> str:
-        """``78.372 s`` from the recording's start, or an empty string when there is no time."""
-        return f"{seconds(self.offset_ns)} s" if self.offset_ns is not None else ""
-
-    def text(self) -> str:
-        """``CODE at 78.372 s: detail`` on one line."""
-        when = f" at {self.at}" if self.at else ""
-        return f"{self.fault_code}{when}: {self.detail}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,95 +91,8 @@ def unreadable_run(budget: Budget, inputs: Sequence[str], error: str) -> CheckRu
 
 def evaluate(budget: Budget, result: Result) -> tuple[Verdict, ...]:
     """One Verdict per rule of the budget, in the budget's order."""
-    facts = _Facts(result)
+    facts = Facts(result)
     return tuple(_verdict(rule, facts) for rule in budget.rules)
-
-
-# -- what the Result says, indexed once ------------------------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class _FormedCluster:
-    cluster_id: str
-    rule_id: str
-    first_at_ns: int | None
-    fault_codes: tuple[str, ...]
-
-
-class _Facts:
-    """Confirmations, CONFIRMED stretches, final states, muting and clusters of one Result."""
-
-    def __init__(self, result: Result) -> None:
-        starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
-        ends = [i.end_ns for i in result.inputs if i.end_ns is not None]
-        if result.summary.start_ns is not None:
-            starts.append(result.summary.start_ns)
-        if result.summary.end_ns is not None:
-            ends.append(result.summary.end_ns)
-        self.start_ns: int | None = min(starts, default=None)
-        self.end_ns: int | None = max(ends, default=None)
-        self.faults: dict[str, FaultSnapshot] = {f.fault_code: f for f in result.faults}
-        self.confirmations: dict[str, list[int]] = {}
-        self.stretches: dict[str, list[tuple[int, int, bool]]] = {}
-        """Per code: (from, to, still CONFIRMED at the end) of every CONFIRMED stretch."""
-        open_since: dict[str, int] = {}
-        for transition in result.transitions:
-            code, t_ns = transition.fault_code, transition.t_ns
-            if transition.to_status == "CONFIRMED":
-                self.confirmations.setdefault(code, []).append(t_ns)
-                open_since.setdefault(code, t_ns)
-            elif code in open_since:
-                since = open_since.pop(code)
-                self.stretches.setdefault(code, []).append((since, t_ns, False))
-        for code, since in open_since.items():
-            end = max(self.end_ns if self.end_ns is not None else since, since)
-            self.stretches.setdefault(code, []).append((since, end, True))
-        self.muted_by: dict[str, set[str]] = {}
-        for muted in result.muted_faults:
-            self.muted_by.setdefault(muted.fault_code, set()).add(muted.root_cause_code)
-        self.clusters: dict[str, _FormedCluster] = {
-            c.cluster_id: _FormedCluster(c.cluster_id, c.rule_id, c.first_at_ns, c.fault_codes)
-            for c in result.clusters
-        }
-        seen: dict[str, list[str]] = {}
-        for event in result.events:
-            fault = event.fault
-            if fault.muted and fault.root_cause_code is not None:
-                self.muted_by.setdefault(fault.fault_code, set()).add(fault.root_cause_code)
-            for cluster_id in fault.cluster_ids:
-                _add_member(seen, cluster_id, fault.fault_code)
-        for fault in result.faults:
-            for cluster_id in fault.cluster_ids:
-                _add_member(seen, cluster_id, fault.fault_code)
-        for mute in result.retroactive_mutes:
-            for code in mute.fault_codes:
-                _add_member(seen, mute.cluster_id, code)
-        for cluster_id, codes in seen.items():
-            if cluster_id not in self.clusters:  # formed, but no longer active at the end
-                rule_id = cluster_id.rsplit("_", 1)[0]  # upstream's ids: "<rule id>_<counter>"
-                self.clusters[cluster_id] = _FormedCluster(cluster_id, rule_id, None, tuple(codes))
-
-    def offset(self, t_ns: int | None) -> int | None:
-        if t_ns is None or self.start_ns is None:
-            return None
-        return t_ns - self.start_ns
-
-    def offender(self, code: str, t_ns: int | None, detail: str) -> Offender:
-        return Offender(code, t_ns, self.offset(t_ns), detail)
-
-    def confirmed_codes(self) -> list[str]:
-        """Codes that confirmed at least once, by first confirmation, then code."""
-        return sorted(self.confirmations, key=lambda c: (self.confirmations[c][0], c))
-
-    def at(self, t_ns: int) -> str:
-        offset = self.offset(t_ns)
-        return f"{seconds(offset)} s" if offset is not None else "?"
-
-
-def _add_member(seen: dict[str, list[str]], cluster_id: str, code: str) -> None:
-    codes = seen.setdefault(cluster_id, [])
-    if code not in codes:
-        codes.append(code)
 
 
 def _faults(count: int) -> str:
@@ -223,7 +115,7 @@ def _sorted(offenders: Iterable[Offender]) -> tuple[Offender, ...]:
 # -- the rules ---------------------------------------------------------------------------------
 
 
-def _verdict(rule: Rule, facts: _Facts) -> Verdict:
+def _verdict(rule: Rule, facts: Facts) -> Verdict:
     spec = rule.spec
     if isinstance(spec, MaxConfirmed):
         return _max_confirmed(rule, spec, facts)
@@ -244,12 +136,12 @@ def _verdict(rule: Rule, facts: _Facts) -> Verdict:
     return _expect_cluster(rule, spec, facts)
 
 
-def _severity_of(facts: _Facts, code: str) -> int:
+def _severity_of(facts: Facts, code: str) -> int:
     fault = facts.faults.get(code)
     return fault.severity if fault is not None else 0
 
 
-def _max_confirmed(rule: Rule, spec: MaxConfirmed, facts: _Facts) -> Verdict:
+def _max_confirmed(rule: Rule, spec: MaxConfirmed, facts: Facts) -> Verdict:
     by_severity: dict[int, list[str]] = {}
     for code in facts.confirmed_codes():
         by_severity.setdefault(_severity_of(facts, code), []).append(code)
@@ -272,7 +164,7 @@ def _max_confirmed(rule: Rule, spec: MaxConfirmed, facts: _Facts) -> Verdict:
     return Verdict(rule, True, "confirmed: " + ", ".join(within))
 
 
-def _never_confirm(rule: Rule, spec: NeverConfirm, facts: _Facts) -> Verdict:
+def _never_confirm(rule: Rule, spec: NeverConfirm, facts: Facts) -> Verdict:
     offenders = []
     for code in facts.confirmed_codes():
         pattern = matches_any(code, spec.patterns)
@@ -288,7 +180,7 @@ def _never_confirm(rule: Rule, spec: NeverConfirm, facts: _Facts) -> Verdict:
     return Verdict(rule, True, f"no fault matching {_patterns(spec.patterns)} confirmed")
 
 
-def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: _Facts) -> Verdict:
+def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: Facts) -> Verdict:
     confirmed = facts.confirmed_codes()
     offenders = [
         facts.offender(
@@ -305,7 +197,7 @@ def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: _Facts) -> Verdict:
     return Verdict(rule, True, f"{_faults(len(confirmed))} confirmed, all allowed")
 
 
-def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: _Facts) -> Verdict:
+def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: Facts) -> Verdict:
     offenders: list[Offender] = []
     highest: tuple[int, str] | None = None
     for pattern, limit in spec.limits:
@@ -328,14 +220,14 @@ def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: _Facts) -> Verdict
     )
 
 
-def _longest(facts: _Facts, code: str) -> tuple[int, int, bool] | None:
+def _longest(facts: Facts, code: str) -> tuple[int, int, bool] | None:
     stretches = facts.stretches.get(code)
     if not stretches:
         return None
     return max(stretches, key=lambda s: (s[1] - s[0], -s[0]))
 
 
-def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: _Facts) -> Verdict:
+def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: Facts) -> Verdict:
     offenders: list[Offender] = []
     longest_seen: tuple[int, str] | None = None
     for pattern, limit in spec.limits:
@@ -367,7 +259,7 @@ def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: _Facts) -> Verd
     return Verdict(rule, True, f"within limits; longest: {code} for {seconds(longest_seen[0])} s")
 
 
-def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: _Facts) -> Verdict:
+def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: Facts) -> Verdict:
     offenders: list[Offender] = []
     checked = 0
     for code in facts.confirmed_codes():
@@ -388,14 +280,14 @@ def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: _Facts) -> Verdict:
     return Verdict(rule, True, f"{_faults(checked)} confirmed, all healed or cleared by the end")
 
 
-def _in_window(facts: _Facts, t_ns: int, spec: ExpectConfirmed | ExpectNotConfirmed) -> bool:
+def _in_window(facts: Facts, t_ns: int, spec: ExpectConfirmed | ExpectNotConfirmed) -> bool:
     if spec.between is None:
         return True
     offset = facts.offset(t_ns)
     return offset is not None and spec.between.holds(offset)
 
 
-def _expect_confirmed(rule: Rule, spec: ExpectConfirmed, facts: _Facts) -> Verdict:
+def _expect_confirmed(rule: Rule, spec: ExpectConfirmed, facts: Facts) -> Verdict:
     seen = [
         (t_ns, code)
         for code in facts.confirmed_codes()
@@ -437,7 +329,7 @@ def _expect_confirmed(rule: Rule, spec: ExpectConfirmed, facts: _Facts) -> Verdi
     return Verdict(rule, True, f"{code} confirmed at {facts.at(t_ns)}{window}")
 
 
-def _expect_not_confirmed(rule: Rule, spec: ExpectNotConfirmed, facts: _Facts) -> Verdict:
+def _expect_not_confirmed(rule: Rule, spec: ExpectNotConfirmed, facts: Facts) -> Verdict:
     window = f" {spec.between}" if spec.between is not None else ""
     offenders = [
         facts.offender(code, t_ns, "confirmed")
@@ -451,8 +343,8 @@ def _expect_not_confirmed(rule: Rule, spec: ExpectNotConfirmed, facts: _Facts) -
     return Verdict(rule, True, f"no fault matching {spec.code} confirmed{window}")
 
 
-def _expect_cluster(rule: Rule, spec: ExpectCluster, facts: _Facts) -> Verdict:
-    def wanted(cluster: _FormedCluster) -> bool:
+def _expect_cluster(rule: Rule, spec: ExpectCluster, facts: Facts) -> Verdict:
+    def wanted(cluster: FormedCluster) -> bool:
         if spec.rule is not None:
             return spec.rule.matches(cluster.rule_id)
         return spec.cluster is not None and spec.cluster.matches(cluster.cluster_id)

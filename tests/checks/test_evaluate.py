@@ -11,7 +11,8 @@ import pytest
 
 from medkit_replay import replay
 from medkit_replay.checks.budget_file import parse_budget
-from medkit_replay.checks.evaluate import Offender, Verdict, check_run, evaluate
+from medkit_replay.checks.evaluate import Verdict, check_run, evaluate
+from medkit_replay.checks.facts import Offender
 from tests.checks.support import NAV2, budget_text, mission
 from tests.outputs.scripts import SEC, T0, clear, report, write_script
 

@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING
 from junitparser import JUnitXml
 
 from medkit_replay.checks.budget_file import parse_budget
-from medkit_replay.checks.evaluate import CheckRun, Offender, Verdict
+from medkit_replay.checks.evaluate import CheckRun, Verdict
+from medkit_replay.checks.facts import Offender
 from medkit_replay.checks.github import (
     escape_data,
     escape_property,
