@@ -1,7 +1,8 @@
 """``medkit-replay fleet INPUT_DIR...``: every recording under some folders, each its own run.
 
-Thin: finds the recordings (:mod:`medkit_replay.fleet.discover`), runs them in processes or on
-a Dask cluster (:mod:`medkit_replay.fleet.run`), writes the report and the summary
+Thin: finds the recordings (:mod:`medkit_replay.fleet.discover`), runs them in processes
+(:mod:`medkit_replay.fleet.workers`) or on a Dask cluster (:mod:`medkit_replay.fleet.cluster`),
+writes the report and the summary
 (:mod:`medkit_replay.fleet.report`).
 """
 
@@ -18,8 +19,10 @@ from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.fleet.cluster import dask_client_type, run_on_dask
 from medkit_replay.fleet.discover import discover
-from medkit_replay.fleet.run import check_configs, dask_client_type, run_all, run_on_dask
+from medkit_replay.fleet.run import check_configs
+from medkit_replay.fleet.workers import run_all
 from medkit_replay.outputs.atomic import refuse_overlap
 
 DEFAULT_OUT = Path("fleet-report")

@@ -1,10 +1,12 @@
 """Fleets: every recording under some folders replayed as its own run, then compared.
 
-``discover`` finds the recordings, ``run`` replays each one (``run_one``, in processes or on a
-Dask cluster) into a small :class:`RunSummary`, ``stats`` builds the fleet table and the
-cross-run statistics, ``report`` writes them (CSV, JSON, HTML, terminal).
+``discover`` finds the recordings, ``run`` replays each one (``run_one``) into a small
+:class:`RunSummary`, ``workers`` runs them in processes and ``cluster`` on a Dask cluster,
+``stats`` builds the fleet table and the cross-run statistics, ``report`` writes them (CSV,
+JSON, HTML, terminal).
 
-Importing this package is cheap (no pandas): worker processes import ``fleet.run`` only.
+Importing this package is cheap (no pandas): worker processes import ``fleet.workers`` and
+``fleet.run`` only.
 """
 
 from __future__ import annotations

@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING
 from distributed import LocalCluster
 
 from medkit_replay.cli import main
-from medkit_replay.fleet import run as fleet_run
+from medkit_replay.fleet import cluster as fleet_cluster
+from medkit_replay.fleet.cluster import run_on_dask
 from medkit_replay.fleet.report import FILES
-from medkit_replay.fleet.run import run_all, run_on_dask
+from medkit_replay.fleet.workers import run_all
 from tests.fleet.fleet_support import BRINGUP, SAMPLES, build_fleet, episode, write_script
 
 if TYPE_CHECKING:
@@ -115,7 +116,7 @@ def test_unreachable_scheduler_is_one_line(
     with socket.socket() as probe:  # a port nobody listens on
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    monkeypatch.setattr(fleet_run, "DASK_CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr(fleet_cluster, "DASK_CONNECT_TIMEOUT", "1s")
     address = f"tcp://127.0.0.1:{port}"
     status = main(["fleet", str(tmp_path / "in"), "--dask", address, "--out", str(tmp_path / "o")])
     out, err = capsys.readouterr()

@@ -10,7 +10,8 @@ import pytest
 from medkit_replay.checks import parse_budget
 from medkit_replay.errors import ConfigError
 from medkit_replay.fleet import run as fleet_run
-from medkit_replay.fleet.run import RunSummary, check_configs, run_all, run_one, summarize
+from medkit_replay.fleet.run import RunSummary, check_configs, run_one, summarize
+from medkit_replay.fleet.workers import default_jobs, run_all
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
 from tests.fleet.fleet_support import BRINGUP, NAV2, SAMPLES, SEC, episode, write_script
@@ -154,9 +155,9 @@ def test_check_configs_refuses_a_bad_config_once(tmp_path: Path) -> None:
 
 
 def test_default_jobs_is_at_least_one() -> None:
-    assert fleet_run.default_jobs() >= 1
+    assert default_jobs() >= 1
 
 
 def test_failed_summary_of_a_lost_worker() -> None:
-    run = fleet_run._failed(Path("x.mcap"), RuntimeError("worker\nlost"))
+    run = fleet_run.failed_run(Path("x.mcap"), RuntimeError("worker\nlost"))
     assert run == RunSummary(path="x.mcap", kind="mcap", error="x.mcap: RuntimeError: worker lost")

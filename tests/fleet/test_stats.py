@@ -8,8 +8,9 @@ from typing import TYPE_CHECKING
 import pandas as pd
 import pytest
 
-from medkit_replay.fleet.run import RunSummary, run_all
+from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.stats import CODE_COLUMNS, RUN_COLUMNS, codes_table, overview, runs_table
+from medkit_replay.fleet.workers import run_all
 from tests.fleet.fleet_support import BRINGUP, SEC, episode, write_script
 
 if TYPE_CHECKING:

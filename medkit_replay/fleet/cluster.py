@@ -1,0 +1,165 @@
+"""A fleet on a Dask distributed cluster: ``run_one`` for every recording as a Dask task.
+
+With a per-run timeout each task replays its recording in a child process of its own
+(``run_isolated``), killed when the time is up.
+"""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.fleet.run import RunSummary, failed_run, run_kind, run_one
+from medkit_replay.fleet.workers import death_text, seconds_text
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from distributed import Client
+
+    from medkit_replay.checks import Budget
+
+DASK_CONNECT_TIMEOUT = "20s"
+"""How long ``--dask`` waits for the scheduler before giving up."""
+DASK_EXTRA_HINT = "pip install 'medkit-replay[dask]'"
+READY_BYTE = b"R"
+"""What the child of ``run_isolated`` writes once it has started."""
+
+
+_CHILD = "from medkit_replay.fleet.cluster import serve_one; serve_one()"
+
+
+def serve_one() -> None:
+    """The child of :func:`run_isolated`: says it has started, then replays the pickled job on
+    standard input and writes its summary, pickled, on standard output."""
+    sys.stdout.buffer.write(READY_BYTE)
+    sys.stdout.buffer.flush()
+    path, configs, budget, label = pickle.load(sys.stdin.buffer)  # from our own parent
+    summary = run_one(path, configs, budget, label)
+    sys.stdout.buffer.write(pickle.dumps(summary, protocol=pickle.HIGHEST_PROTOCOL))
+    sys.stdout.buffer.flush()
+
+
+def run_isolated(
+    path: str | Path,
+    configs: Sequence[str | Path] = (),
+    budget: Budget | None = None,
+    label: str | None = None,
+    timeout: float | None = None,
+) -> RunSummary:
+    """``run_one`` in a child process of its own, killed after ``timeout`` seconds (counted once
+    it has started): what a Dask task runs when the fleet has a per-run timeout (a thread
+    cannot be stopped, and a daemonic Dask worker may not use multiprocessing). A child that
+    dies or runs out of time is this run's failure."""
+    shown = str(path) if label is None else label
+    job = pickle.dumps((str(path), tuple(str(c) for c in configs), budget, label))
+    child = subprocess.Popen(  # our own interpreter and module
+        [sys.executable, "-c", _CHILD],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        assert child.stdout is not None
+        output = b""
+        if child.stdout.read(len(READY_BYTE)) == READY_BYTE:
+            output, _ = child.communicate(job, timeout=timeout)
+        child.wait()
+    except subprocess.TimeoutExpired:
+        problem = f"timed out after {seconds_text(timeout or 0)} s"
+    else:
+        if child.returncode == 0:
+            try:
+                summary = pickle.loads(output)  # from our own child
+            except Exception:  # a truncated pickle: the child did not finish
+                summary = None
+            if isinstance(summary, RunSummary):
+                return summary
+        problem = f"worker died: {death_text(child.returncode)}"
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+        for stream in (child.stdin, child.stdout):
+            if stream is not None:
+                stream.close()
+    return RunSummary(path=shown, kind=run_kind(Path(path)), error=f"{shown}: {problem}")
+
+
+def run_on_dask(
+    address: str,
+    paths: Sequence[Path],
+    configs: Sequence[Path] = (),
+    *,
+    budget: Budget | None = None,
+    timeout: float | None = None,
+    on_done: Callable[[int, RunSummary], None] | None = None,
+) -> list[RunSummary]:
+    """Run every recording on a Dask distributed cluster, with the same ``run_one``.
+
+    The workers need medkit-replay installed and the recordings and configs at the same
+    absolute paths (a shared file system); they are sent absolute paths, and the summaries
+    come back named as found (``run_one``'s ``label``), so the report is the same as
+    ``run_all``'s. With a ``timeout``, each task runs its recording in a child process
+    (:func:`run_isolated`) that is killed when the time is up.
+
+    Raises:
+        MedkitReplayError: the ``distributed`` package is missing, or the scheduler cannot be
+            reached.
+    """
+    client_type = dask_client_type()
+    try:
+        client = client_type(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError, TypeError) as err:
+        problem = " ".join(str(err).split()) or type(err).__name__
+        raise MedkitReplayError(
+            f"cannot reach the Dask scheduler ({problem})", path=address
+        ) from None
+    from distributed import as_completed as dask_as_completed  # noqa: PLC0415  # optional
+
+    results: list[RunSummary | None] = [None] * len(paths)
+    try:
+        absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
+        arguments: list[list[object]] = [
+            [str(p.absolute()) for p in paths],
+            [absolute_configs] * len(paths),
+            [budget] * len(paths),
+            [str(p) for p in paths],
+        ]
+        if timeout is None:
+            futures = client.map(run_one, *arguments, pure=False)
+        else:
+            arguments.append([timeout] * len(paths))
+            futures = client.map(run_isolated, *arguments, pure=False)
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        for future in dask_as_completed(futures, loop=client.loop):  # type: ignore[no-untyped-call]
+            index = index_of[future.key]
+            try:
+                summary = future.result()
+            except Exception as err:  # a lost worker (KilledWorker), a cancelled task
+                summary = failed_run(paths[index], err)
+            results[index] = summary
+            if on_done is not None:
+                on_done(index, summary)
+    finally:
+        client.close()  # type: ignore[no-untyped-call]
+    return [r for r in results if r is not None]
+
+
+def dask_client_type() -> type[Client]:
+    """``distributed.Client``, imported on demand.
+
+    Raises:
+        MedkitReplayError: ``distributed`` is not installed (names the extra to install).
+    """
+    try:
+        from distributed import Client  # noqa: PLC0415  # optional and heavy
+    except ImportError:
+        raise MedkitReplayError(
+            f"--dask needs the Dask distributed package: {DASK_EXTRA_HINT}"
+        ) from None
+    return Client
