@@ -2,8 +2,8 @@
 
 Thin: finds the recordings (:mod:`medkit_replay.fleet.discover`), runs them in processes
 (:mod:`medkit_replay.fleet.workers`) or on a Dask cluster (:mod:`medkit_replay.fleet.cluster`),
-writes the report and the summary
-(:mod:`medkit_replay.fleet.report`).
+writes the report (:mod:`medkit_replay.fleet.report`) and the summary
+(:mod:`medkit_replay.fleet.terminal`).
 """
 
 from __future__ import annotations
@@ -111,11 +111,10 @@ def fleet(
         parsed_budget = load_budget(budget)
     from medkit_replay.fleet.report import (  # noqa: PLC0415  # pandas: only when it runs
         FILES,
-        fleet_progress,
-        print_summary,
         tabulated,
         write_texts,
     )
+    from medkit_replay.fleet.terminal import fleet_progress, print_summary  # noqa: PLC0415
 
     protected = [*input_dirs, *config_files(configs), *([budget] if budget is not None else [])]
     refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])

@@ -3,7 +3,7 @@
 ``discover`` finds the recordings, ``run`` replays each one (``run_one``) into a small
 :class:`RunSummary`, ``workers`` runs them in processes and ``cluster`` on a Dask cluster,
 ``stats`` builds the fleet table and the cross-run statistics, ``report`` writes them (CSV,
-JSON, HTML, terminal).
+JSON, HTML) and ``terminal`` shows them.
 
 Importing this package is cheap (no pandas): worker processes import ``fleet.workers`` and
 ``fleet.run`` only.

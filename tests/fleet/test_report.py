@@ -8,17 +8,16 @@ import json
 from html.parser import HTMLParser
 from typing import TYPE_CHECKING
 
-from medkit_replay.fleet.report import (
-    FILES,
+from medkit_replay.fleet.report import FILES, write_report
+from medkit_replay.fleet.run import RunSummary
+from medkit_replay.fleet.stats import CODE_COLUMNS, RUN_COLUMNS
+from medkit_replay.fleet.terminal import (
     MAX_RUN_ROWS,
     FleetProgress,
     fleet_progress,
     print_summary,
     render_summary,
-    write_report,
 )
-from medkit_replay.fleet.run import RunSummary
-from medkit_replay.fleet.stats import CODE_COLUMNS, RUN_COLUMNS
 from medkit_replay.result import STATUSES
 
 if TYPE_CHECKING:

@@ -1,0 +1,243 @@
+"""A fleet on the terminal: the summary printed after the runs and the progress bar meanwhile.
+
+Text that comes from a recording or a path is shown literally (no rich markup, control
+characters escaped); away from a terminal the summary is plain text at 80 columns.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import TYPE_CHECKING, TextIO
+
+from rich import box
+from rich.console import Console
+from rich.padding import Padding
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+
+from medkit_replay.fleet.report import FILES, is_missing
+from medkit_replay.fleet.stats import codes_table, overview
+from medkit_replay.text import printable
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from pathlib import Path
+    from types import TracebackType
+    from typing import Self
+
+    from medkit_replay.fleet.run import RunSummary
+
+MAX_RUN_ROWS = 40
+"""Runs listed on the terminal; the files have all of them."""
+MAX_CODE_ROWS = 20
+"""Codes listed on the terminal."""
+MAX_ERROR_ROWS = 20
+"""Failed recordings listed on the terminal."""
+
+
+def _seconds(value: float | None) -> str:
+    return "" if value is None or is_missing(value) else f"{value:,.1f}"
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count:,} {word}" + ("" if count == 1 else "s")
+
+
+def _indented(text: Text) -> Padding:
+    return Padding(text, (0, 0, 0, 2))
+
+
+def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> list[object]:
+    """What the terminal summary shows, as rich renderables."""
+    counts = overview(runs)
+    head = Text()
+    head.append("fleet: ", style="bold")
+    head.append(f"{_plural(counts['runs'], 'recording')}, {counts['replayed']:,} replayed")
+    if counts["failed"]:
+        head.append(f", {counts['failed']:,} failed", style="bold red")
+    head.append(
+        f"; {_plural(counts['messages'], 'message')} read; "
+        f"{counts['runs_with_confirmed']:,} with a confirmed fault"
+    )
+    parts: list[object] = [head]
+    verdicts = {k.removeprefix("budget_"): v for k, v in counts.items() if k.startswith("budget_")}
+    if verdicts:
+        line = Text("budget: ", style="bold")
+        for index, (verdict, number) in enumerate(verdicts.items()):
+            line.append(", " if index else "")
+            line.append(f"{number:,} {verdict}", style="bold red" if verdict == "fail" else "")
+        parts.append(line)
+
+    title = "runs (faults CONFIRMED, HEALED, CLEARED at the end)"
+    table = Table(box=box.SIMPLE, title=title, title_justify="left", pad_edge=False)
+    table.add_column("path", min_width=16, overflow="fold")
+    for name in ("span s", "msgs", "conf", "heal", "clear"):
+        table.add_column(name, justify="right", no_wrap=True, min_width=len(name))
+    if verdicts:
+        table.add_column("budget", no_wrap=True, min_width=len("budget"))
+    for run in runs[:MAX_RUN_ROWS]:
+        statuses = dict(run.faults_by_status)
+        span = run.span_ns
+        cells: list[Text | str] = [
+            Text(printable(str(run.path)), style="" if run.ok else "red"),
+            _seconds(span / 1e9 if span is not None else None),
+            f"{run.messages:,}" if run.messages is not None else "",
+            *(
+                f"{statuses.get(s, 0):,}" if run.ok else ""
+                for s in ("CONFIRMED", "HEALED", "CLEARED")
+            ),
+        ]
+        if verdicts:
+            cells.append(Text(run.budget or "", style="bold red" if run.budget == "fail" else ""))
+        table.add_row(*cells)
+    parts.append(table)
+    if len(runs) > MAX_RUN_ROWS:
+        parts.append(Text(f"... {len(runs) - MAX_RUN_ROWS:,} more runs in runs.csv", style="dim"))
+
+    codes = codes_table(runs)
+    if len(codes):
+        code_table = Table(
+            box=box.SIMPLE,
+            title="codes confirmed across runs",
+            title_justify="left",
+            pad_edge=False,
+        )
+        widest = max(len(str(code)) for code in codes["fault_code"])
+        code_table.add_column("fault code", overflow="fold", min_width=min(widest, 24))
+        for name in ("runs", "share", "heals", "mean heal", "median heal"):
+            code_table.add_column(name, justify="right", no_wrap=True, min_width=len(name))
+        for record in codes.head(MAX_CODE_ROWS).to_dict(orient="records"):
+            code_table.add_row(
+                Text(printable(str(record["fault_code"]))),
+                f"{record['runs_confirmed']:,}",
+                f"{record['share_of_runs']:.0%}",
+                f"{record['heals']:,}",
+                _seconds(record["mean_time_to_heal_s"]),
+                _seconds(record["median_time_to_heal_s"]),
+            )
+        parts.append(code_table)
+        if len(codes) > MAX_CODE_ROWS:
+            more = len(codes) - MAX_CODE_ROWS
+            parts.append(Text(f"... {more:,} more codes in codes.csv", style="dim"))
+
+    over = [run for run in runs if run.budget == "fail"]
+    if over:
+        parts.append(Text("over budget:", style="bold red"))
+        for run in over[:MAX_ERROR_ROWS]:
+            rules = "; ".join(run.budget_failures)
+            parts.append(_indented(Text(f"{printable(str(run.path))}: {printable(str(rules))}")))
+        if len(over) > MAX_ERROR_ROWS:
+            more = len(over) - MAX_ERROR_ROWS
+            parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
+    failed = [run for run in runs if not run.ok]
+    if failed:
+        parts.append(Text("not replayed:", style="bold red"))
+        for run in failed[:MAX_ERROR_ROWS]:
+            error = run.error or ""
+            shown = error if error.startswith(run.path) else f"{run.path}: {error}"
+            parts.append(_indented(Text(printable(str(shown)))))
+        if len(failed) > MAX_ERROR_ROWS:
+            more = len(failed) - MAX_ERROR_ROWS
+            parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
+    if out_dir is not None:
+        parts.append(Text(f"report: {printable(str(out_dir))}/ ({', '.join(FILES)})"))
+    return parts
+
+
+def _console(stream: TextIO, *, plain: bool) -> Console:
+    if plain:
+        return Console(
+            file=stream,
+            width=80,
+            force_terminal=False,
+            color_system=None,
+            no_color=True,
+            markup=False,
+            emoji=False,
+            highlight=False,
+        )
+    return Console(file=stream, markup=False, emoji=False, highlight=False)
+
+
+def render_summary(runs: Sequence[RunSummary], out_dir: Path | None = None) -> str:
+    """The terminal summary as plain text at 80 columns (what a file or a pipe receives)."""
+    buffer = io.StringIO()
+    console = _console(buffer, plain=True)
+    for part in summary_renderables(runs, out_dir):
+        console.print(part)
+    return "\n".join(line.rstrip(" ") for line in buffer.getvalue().split("\n"))
+
+
+def print_summary(runs: Sequence[RunSummary], stream: TextIO, out_dir: Path | None = None) -> None:
+    """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
+    console = _console(stream, plain=False)
+    if console.is_terminal:
+        for part in summary_renderables(runs, out_dir):
+            console.print(part)
+        return
+    stream.write(render_summary(runs, out_dir))
+
+
+# --- progress ---------------------------------------------------------------------------------
+
+
+class FleetProgress:
+    """A bar counting finished runs, on standard error; a context manager, and the
+    ``on_done`` callback of the executors."""
+
+    def __init__(self, stream: TextIO, total: int) -> None:
+        console = Console(file=stream, highlight=False, emoji=False, markup=False)
+        self._progress = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(bar_width=30),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[failed]}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console,
+            transient=True,
+            redirect_stdout=False,
+            redirect_stderr=False,
+            refresh_per_second=8,
+        )
+        self._task = self._progress.add_task("replaying", total=total, failed="")
+        self._failed = 0
+
+    def __enter__(self) -> Self:
+        self._progress.start()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self._progress.stop()
+
+    def __call__(self, index: int, run: RunSummary) -> None:
+        """One more run finished."""
+        self._failed += 0 if run.ok else 1
+        failed = f"{self._failed} failed" if self._failed else ""
+        self._progress.update(self._task, advance=1, failed=failed)
+
+
+def fleet_progress(stream: TextIO, total: int, *, quiet: bool = False) -> FleetProgress | None:
+    """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal."""
+    if quiet:
+        return None
+    isatty = getattr(stream, "isatty", None)
+    if isatty is None or not isatty():
+        return None
+    console = Console(file=stream)
+    if not console.is_terminal or console.is_dumb_terminal:
+        return None
+    return FleetProgress(stream, total)
