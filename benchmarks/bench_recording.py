@@ -79,7 +79,7 @@ from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
-from medkit_replay.inputs.typestore import base_typestore
+from medkit_replay.msgdefs import base_typestore
 from medkit_replay.pipeline import replay
 
 if TYPE_CHECKING:

@@ -149,7 +149,7 @@ def _recorded_report_codes(
     bags = [p for p in inputs if p.suffix != ".jsonl"]
     if not bags:
         return codes
-    with open_recording(bags, only_roles=("report_fault",), light=True) as recording:
+    with open_recording(bags, only_roles=("report_fault",)) as recording:
         meter = _Meter(progress, "prescan", recording, every) if progress is not None else None
         next_at = meter.next_at if meter is not None else 0
         messages = 0
@@ -218,7 +218,6 @@ def replay(
         rosout=rosout,
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
-        light=True,
     ) as recording:
         meter = (
             _Meter(progress, "replay", recording, progress_every) if progress is not None else None

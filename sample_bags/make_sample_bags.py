@@ -19,7 +19,7 @@ import numpy as np
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
-from medkit_replay.inputs.typestore import base_typestore
+from medkit_replay.msgdefs import base_typestore
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Sequence

@@ -21,7 +21,7 @@ from rosbags.rosbag2 import Reader
 
 from medkit_replay import replay
 from medkit_replay.cli import main
-from medkit_replay.inputs.typestore import base_typestore
+from medkit_replay.msgdefs import base_typestore
 from medkit_replay.outputs.json_report import dumps
 
 if TYPE_CHECKING:

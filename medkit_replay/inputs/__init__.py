@@ -3,9 +3,9 @@
 rosbag2 directories (metadata.yaml; sqlite3 or MCAP storage; split files; zstd file or message
 compression) and bare ``.mcap`` / ``.db3`` files are read streaming and read-only; several inputs
 merge in (log time, input index, position) order. Only the topics the replay needs are decoded
-(:class:`Selection`), with rosbags, from the recording's own definitions or bundled ones, or
-(``light=True``) with light decoders generated from the same definitions, rosbags deciding every
-payload they refuse. Uncompressed MCAP chunks are read through their message indexes.
+(:class:`Selection`), by decoders generated from the recording's own definitions or bundled
+ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP
+chunks are read through their message indexes.
 Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
 can be read raises :class:`~medkit_replay.errors.InputError`.
 
@@ -16,8 +16,9 @@ can be read raises :class:`~medkit_replay.errors.InputError`.
 """
 
 from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
-from medkit_replay.inputs.selection import Role, Selection, normalize_typename
+from medkit_replay.inputs.selection import Role, Selection
 from medkit_replay.inputs.source import Input, InputContext, Message, Opener
+from medkit_replay.msgdefs import normalize_typename
 
 __all__ = [
     "READERS",

@@ -1,26 +1,36 @@
-"""Light CDR decoders: straight-line Python generated from a recording's own message definition.
+"""Generated CDR decoders: straight-line Python generated from a recording's own definition.
 
-A port of rosbags' deserializer generator (``rosbags.serde.cdr``, little-endian payloads) that
+A port of rosbags' deserializer generator (``rosbags.serde.cdr``, plain little-endian CDR) that
 inlines nested messages and the string checks and builds plain slotted records with the same
 field names, values and value types (numpy arrays for arrays of numbers, as rosbags). It follows
-rosbags' alignment bookkeeping line by line and rejects every payload rosbags rejects; a payload
-it rejects (big-endian, damaged...) is left to rosbags, so results never depend on which ran.
-Definitions it does not cover (wstring, float128, odd field names) get no light decoder.
+rosbags' alignment bookkeeping line by line and refuses exactly the payloads rosbags refuses
+(tests/speed/test_light_decoders.py). Definitions it does not cover (wstring, float128, odd field
+names) get no generated decoder: rosbags decodes those types.
 """
 
 from __future__ import annotations
 
 import keyword
+import linecache
+import struct
 import sys
+import weakref
 from dataclasses import make_dataclass
-from itertools import pairwise
+from itertools import count, pairwise
 from struct import Struct
 from typing import TYPE_CHECKING, Any
 
 import numpy
 from rosbags.interfaces import Nodetype
-from rosbags.serde import primitives
-from rosbags.serde.utils import SIZEMAP, align, align_after
+
+from medkit_replay.inputs.rosbags_internals import (
+    SIZEMAP,
+    align,
+    align_after,
+    max_sequence_length,
+    unpack_le,
+)
+from medkit_replay.msgdefs import base_typestore
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -53,7 +63,29 @@ class UnsupportedError(Exception):
 
 
 class RejectedError(Exception):
-    """A payload the light decoder does not take; rosbags decides what it is."""
+    """A payload that does not fit the definition (a check rosbags makes too)."""
+
+
+REFUSALS = (RejectedError, struct.error, IndexError, UnicodeDecodeError, ValueError)
+"""What a generated decoder raises on bytes that do not fit: its own checks, a read past the
+end (struct, indexing), text that is not UTF-8, and numpy's buffer too small for an array.
+Anything else it raises is a bug in the generated code."""
+
+
+_NOT_PLAIN = "Invalid or unsupported CDR encapsulation."
+
+
+def string_refusal(raw: bytes, p: int, length: int) -> str:
+    """Why the string at ``p`` is refused, worded (and placed in the CDR body) as rosbags does."""
+    end = p + 4 + length
+    if length < 1 or end > len(raw):
+        return f"Invalid string length {length} at offset {p - 4}."
+    return f"Missing string terminator at offset {end - 5}."
+
+
+def sequence_refusal(size: int, p: int) -> str:
+    """Why a sequence count read before ``p`` is refused, worded as rosbags does."""
+    return f"Invalid sequence length {size} at offset {p - 4}."
 
 
 def _align(a: int, ind: str) -> list[str]:
@@ -68,7 +100,7 @@ def _align(a: int, ind: str) -> list[str]:
 
 
 class _Generator:
-    """Emits one decode function for one type and the light classes it builds."""
+    """Emits one decode function for one type and the record classes it builds."""
 
     def __init__(self, store: Typestore) -> None:
         self.store = store
@@ -82,7 +114,7 @@ class _Generator:
         return f"{stem}{self.counter}"
 
     def cls(self, typename: str) -> str:
-        """The name (in the generated namespace) of the light class of ``typename``."""
+        """The name (in the generated namespace) of the record class of ``typename``."""
         key = "C_" + typename.replace("/", "__")
         if key in self.names:
             return key
@@ -109,7 +141,7 @@ class _Generator:
         if typ not in _PRIMITIVES:
             raise UnsupportedError(f"type {typ}")
         key = f"u_{typ}"
-        self.names[key] = getattr(primitives, f"unpack_{typ}_le")
+        self.names[key] = unpack_le(typ)
         return key
 
     def dtype(self, typ: str) -> str:
@@ -121,12 +153,13 @@ class _Generator:
 
     def string(self, target: str, ind: str) -> list[str]:
         """Decode one string into ``target``, checked as rosbags' ``check_string`` does."""
-        self.names["u_uint32"] = primitives.unpack_uint32_le
+        self.names["u_uint32"] = unpack_le("uint32")
+        self.names["string_refusal"] = string_refusal
         return [
             f"{ind}ln = u_uint32(raw, p)[0]",
             f"{ind}e = p + 4 + ln",
             f"{ind}if ln < 1 or e > n or raw[e - 1]:",
-            f"{ind}    raise RejectedError",
+            f"{ind}    raise RejectedError(string_refusal(raw, p, ln))",
             f"{ind}{target} = raw[p + 4 : e - 1].decode()",
             f"{ind}p = e",
         ]
@@ -207,8 +240,9 @@ class _Generator:
     def sequence(self, desc: Any, value: str, ind: str, aligned: int) -> int:
         subdesc = desc[1][0]
         out = self.lines
-        self.names["u_uint32"] = primitives.unpack_uint32_le
-        self.names["MAXSEQ"] = self.store.max_sequence_length
+        self.names["u_uint32"] = unpack_le("uint32")
+        self.names["MAXSEQ"] = max_sequence_length(self.store)
+        self.names["sequence_refusal"] = sequence_refusal
         size = self.var("n")
         out.append(f"{ind}{size} = u_uint32(raw, p)[0]")
         out.append(f"{ind}p += 4")
@@ -219,7 +253,7 @@ class _Generator:
         else:
             minimum = 1
         out.append(f"{ind}if p + {size} * {minimum} > n or {size} > MAXSEQ:")
-        out.append(f"{ind}    raise RejectedError")
+        out.append(f"{ind}    raise RejectedError(sequence_refusal({size}, p))")
         if subdesc[0] == Nodetype.BASE:
             typ = subdesc[1][0]
             if typ == "string":
@@ -259,8 +293,14 @@ class _Generator:
         return min(4, aligned)
 
 
+_SERIALS = count(1)
+
+
 def generate(msgtype: str, store: Typestore) -> tuple[Callable[[bytes], object], str]:
-    """The light decoder of ``msgtype`` as ``store`` defines it, and its source (for tests).
+    """The decoder of ``msgtype`` as ``store`` defines it, and its source (for tests).
+
+    The source is registered with :mod:`linecache` under a name of its own, so tracebacks and
+    debuggers show the generated lines.
 
     Raises:
         UnsupportedError: the definition uses something the generator does not cover.
@@ -275,25 +315,28 @@ def generate(msgtype: str, store: Typestore) -> tuple[Callable[[bytes], object],
     bound = ", ".join(f"{name}={name}" for name in sorted(gen.names))  # globals as fast locals
     lines = [
         f"def decode(raw, {bound}):",
-        "    if raw[0] or raw[1] != 1:",
-        "        raise RejectedError",
         "    n = len(raw)",
+        "    if n < 4 or raw[0] or raw[1] != 1:",
+        f"        raise RejectedError({_NOT_PLAIN!r})",
         "    p = 4",
         *body,
         "    if p + 3 < n:",
-        "        raise RejectedError",
+        f"        raise RejectedError({f'CDR message size mismatch for {msgtype!r}.'!r})",
         "    return result",
     ]
-    source = "\n".join(lines)
+    source = "\n".join(lines) + "\n"
+    filename = f"<medkit-replay decoder of {msgtype} #{next(_SERIALS)}>"
+    linecache.cache[filename] = (len(source), None, source.splitlines(keepends=True), filename)
     namespace = dict(gen.names)
-    exec(compile(source, f"<light decoder of {msgtype}>", "exec"), namespace)
+    exec(compile(source, filename, "exec"), namespace)
     decode: Callable[[bytes], object] = namespace["decode"]  # type: ignore[assignment]
+    weakref.finalize(decode, linecache.cache.pop, filename, None)  # the lines live as it does
     return decode, source
 
 
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
-_U32 = primitives.unpack_uint32_le
-_BYTE = primitives.unpack_byte_le
+_U32 = unpack_le("uint32")
+_BYTE = unpack_le("byte")
 _TIME = Struct("<iI").unpack_from
 _MAX_HEADS = 4096
 
@@ -315,7 +358,7 @@ def _sublayout(store: Typestore, desc: FieldDesc) -> object:
 
 
 class DiagnosticArrayView:
-    """A light diagnostic_msgs/msg/DiagnosticArray decoded for the diagnostic bridge.
+    """A diagnostic_msgs/msg/DiagnosticArray decoded for the diagnostic bridge.
 
     ``heads`` holds each status's (level, name, message, hardware_id), shared between arrays
     whose statuses repeat those bytes. ``header`` and ``status`` (the full statuses, with
@@ -340,14 +383,14 @@ class DiagnosticArrayView:
 
     @property
     def header(self) -> object:
-        """std_msgs/msg/Header, as the generic light decoder builds it."""
+        """std_msgs/msg/Header, as the generic generated decoder builds it."""
         header_cls, time_cls, _, _ = self._types
         sec, nanosec, frame_id = self._header
         return header_cls(time_cls(sec, nanosec), frame_id)
 
     @property
     def status(self) -> list[object]:
-        """The statuses, as the generic light decoder builds them."""
+        """The statuses, as the generic generated decoder builds them."""
         if self._built is not None:
             return self._built
         _, _, status_cls, pair_cls = self._types
@@ -406,33 +449,40 @@ def _diagnostic_array(store: Typestore) -> Callable[[bytes], object]:
             "diagnostic_msgs/msg/KeyValue",
         )
     )
-    max_seq = store.max_sequence_length
+    max_seq = max_sequence_length(store)
     heads_seen: dict[bytes, tuple[int, str, str, str]] = {}
 
     def checked(raw: bytes, p: int, n: int) -> tuple[str, int]:
         length = _U32(raw, p)[0]
         end = p + 4 + length
         if length < 1 or end > n or raw[end - 1]:
-            raise RejectedError
+            raise RejectedError(string_refusal(raw, p, length))
         return raw[p + 4 : end - 1].decode(), end
 
+    def head_refusal(raw: bytes, start: int, n: int) -> RejectedError:
+        at = (start + 4) & -4
+        for _ in range(3):  # the first text that does not fit raises, worded as rosbags does
+            _, at = checked(raw, at, n)
+            at = (at + 3) & -4
+        return RejectedError(f"Invalid string length at offset {start - 4}.")
+
     def decode(raw: bytes) -> DiagnosticArrayView:  # straight for speed
-        if raw[0] or raw[1] != 1:
-            raise RejectedError
         n = len(raw)
+        if n < 4 or raw[0] or raw[1] != 1:
+            raise RejectedError(_NOT_PLAIN)
         # Every length field sits 4-aligned: read them as native words (checked little-endian).
         u32 = memoryview(raw)[: n & -4].cast("I")
         sec, nanosec = _TIME(raw, 4)
         length = u32[3]
         p = 16 + length
         if not length or raw[p - 1]:
-            raise RejectedError
+            raise RejectedError(string_refusal(raw, 12, length))
         frame_id = raw[16 : p - 1].decode()
         p = (p + 3) & -4
         count = u32[p >> 2]
         p += 4
         if p + count > n or count > max_seq:
-            raise RejectedError
+            raise RejectedError(sequence_refusal(count, p))
         heads: list[tuple[int, str, str, str]] = []
         for _ in range(count):
             start = p
@@ -443,7 +493,7 @@ def _diagnostic_array(store: Typestore) -> Callable[[bytes], object]:
             p = (e2 + 3) & -4
             e3 = p + 4 + u32[p >> 2]
             if e3 > n:
-                raise RejectedError
+                raise head_refusal(raw, start, n)
             key = raw[start:e3]
             head = heads_seen.get(key)
             if head is None:
@@ -460,26 +510,26 @@ def _diagnostic_array(store: Typestore) -> Callable[[bytes], object]:
             pairs = u32[p >> 2]
             p += 4
             if p + pairs > n or pairs > max_seq:
-                raise RejectedError
+                raise RejectedError(sequence_refusal(pairs, p))
             first = p
             for _ in range(pairs):
-                # A text past the end fails at raw[e - 1] (IndexError): rosbags then decides.
+                # A text past the end fails at raw[e - 1] (IndexError): a refusal.
                 p = (p + 3) & -4
                 length = u32[p >> 2]
                 e = p + 4 + length
                 if not length or raw[e - 1]:
-                    raise RejectedError
-                p = (e + 3) & -4
-                length = u32[p >> 2]
-                p += 4 + length
+                    raise RejectedError(string_refusal(raw, p, length))
+                q = (e + 3) & -4
+                length = u32[q >> 2]
+                p = q + 4 + length
                 if not length or raw[p - 1]:
-                    raise RejectedError
+                    raise RejectedError(string_refusal(raw, q, length))
             if pairs and not raw[first:p].isascii():
                 at = first
                 for _ in range(2 * pairs):  # not all ASCII: check each text decodes
                     _, at = checked(raw, (at + 3) & -4, n)
         if p + 3 < n:
-            raise RejectedError
+            raise RejectedError(f"CDR message size mismatch for {DIAGNOSTIC_ARRAY!r}.")
         return DiagnosticArrayView((sec, nanosec, frame_id), heads, raw, types)
 
     return decode
@@ -492,8 +542,6 @@ _SPECIAL: dict[str, Callable[[Typestore], Callable[[bytes], object]]] = {
 
 
 def _standard(msgtype: str, store: Typestore) -> bool:
-    from medkit_replay.inputs.typestore import base_typestore  # noqa: PLC0415  # import cycle
-
     try:
         return _layout(store, msgtype) == _layout(base_typestore(), msgtype)
     except (KeyError, TypeError, ValueError):
@@ -504,10 +552,11 @@ _CACHE: dict[tuple[str, int], tuple[Typestore, Callable[[bytes], object] | None]
 _CACHE_SIZE = 1024
 
 
-def light_decoder(msgtype: str, store: Typestore) -> Callable[[bytes], object] | None:
-    """The light decoder of ``msgtype`` in ``store`` (cached per store), or None if unsupported.
+def generated_decoder(msgtype: str, store: Typestore) -> Callable[[bytes], object] | None:
+    """The decoder of ``msgtype`` in ``store`` (cached per store), or None if unsupported.
 
-    The decoder raises on any payload it does not take; the caller then asks rosbags.
+    It takes plain little-endian CDR (encapsulation header ``00 01``) and raises one of
+    :data:`REFUSALS` on a payload that does not fit the definition.
     """
     key = (msgtype, id(store))
     cached = _CACHE.get(key)

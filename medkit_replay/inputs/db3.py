@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.files import FileRefusedError, open_regular
 from medkit_replay.inputs.merge import Bound, Timed
-from medkit_replay.inputs.selection import normalize_typename
 from medkit_replay.inputs.storage import (
     MESSAGE_SIZE_LIMIT,
     Connection,
@@ -23,7 +22,7 @@ from medkit_replay.inputs.storage import (
     Raw,
     temp_room,
 )
-from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
+from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator

@@ -18,9 +18,8 @@ from typing import TYPE_CHECKING, BinaryIO, NamedTuple
 
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed
-from medkit_replay.inputs.selection import normalize_typename
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
-from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
+from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -139,7 +138,7 @@ class McapFile:
         self.path = path
         self.file_no = file_no
         self.warn = warn
-        self.indexed = indexed  # False: always read whole chunks (the reference route)
+        self.indexed = indexed  # False: always read whole chunks
         self._buffer = bytearray()
         self._cold = True  # the chunk being read comes from the disk, not the page cache
         self.connections: dict[int, Connection] = {}

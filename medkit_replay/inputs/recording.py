@@ -136,8 +136,7 @@ def open_recording(
     diagnostics_topics: Iterable[str] = ("/diagnostics",),
     extra_topics: Iterable[str] = (),
     only_roles: Iterable[Role] | None = None,
-    light: bool = False,
-    reference: bool = False,
+    use_index: bool = True,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
@@ -147,10 +146,8 @@ def open_recording(
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).
         only_roles: read only topics of these roles (None: every role).
-        light: decode the topics the bridges read (every role but ``extra``) into light
-            records (same field names and values as rosbags' classes, plain slotted
-            objects), rosbags deciding every payload the light decoder does not take.
-        reference: the reference route: MCAP chunks always read whole, never by index.
+        use_index: read uncompressed MCAP chunks through their message indexes (False:
+            every chunk is read whole; the messages are the same).
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -184,7 +181,7 @@ def open_recording(
                     f"unsupported input (expected a rosbag2 directory or a {kinds} file)",
                     path=str(path),
                 )
-            context = InputContext(index, selection, sink, light=light, reference=reference)
+            context = InputContext(index, selection, sink, use_index=use_index)
             try:
                 inputs.append(opener(path, context))
             except OSError as exc:

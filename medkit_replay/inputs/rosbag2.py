@@ -23,8 +23,9 @@ from medkit_replay.inputs.mcap import MAGIC as MCAP_MAGIC, McapFile
 from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, TEMP_MARGIN, NotABagError, temp_room
-from medkit_replay.inputs.typestore import DecodeError, Decoder, DefinitionError, make_decoder
+from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder
 from medkit_replay.model import InputSummary, TopicSummary
+from medkit_replay.msgdefs import DefinitionError
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded
 
 if sys.version_info >= (3, 14):
@@ -278,7 +279,7 @@ class Rosbag2Input:
             opener = McapFile if self._meta.storage == "mcap" else Db3File
         opened = opener(path, file_no, self.ctx.warn)
         if isinstance(opened, McapFile):
-            opened.indexed = not self.ctx.reference
+            opened.indexed = self.ctx.use_index
         return opened
 
     def _decompress(self, path: Path) -> Path:
@@ -359,7 +360,6 @@ class Rosbag2Input:
                     msgtype,
                     connection.definition,
                     lambda note: self._warn(f"{topic}: {note}"),
-                    light=self.ctx.light and role != "extra",
                 )
             except DefinitionError as exc:
                 self._warn(f"topic {topic} cannot be decoded: {exc}; not read")
@@ -413,9 +413,7 @@ class Rosbag2Input:
                     try:
                         if every_zstd or data[:4] == ZSTD_MAGIC:
                             data = _unzstd(data)
-                        msg = decoder.light_decode(data)
-                        if msg is None:
-                            msg = decoder.decode(data)
+                        msg = decoder.decode(data)
                     except (DecodeError, ValueError, zstd.ZstdError) as exc:
                         self._failed(connection.topic, t_ns, exc)
                         continue

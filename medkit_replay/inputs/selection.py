@@ -5,7 +5,6 @@ Pure: decides from a topic's name and type alone; no I/O and no decoding.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from typing import Literal
 
@@ -35,25 +34,6 @@ _SUFFIX_ROLES: tuple[tuple[str, Role, str], ...] = (
     ("/fault_manager/events", "fault_events", FAULT_EVENT_TYPE),
 )
 
-_OLD_STYLE = re.compile(r"^(?P<pkg>[^/]+)/(?P<name>[^/]+)$")
-_SRV_AS_MSG = re.compile(r"^(?P<pkg>[^/]+)/srv/msg/(?P<name>[^/]+)$")
-_SERVICE_PARTS = ("_Request", "_Response", "_Event")
-
-
-def normalize_typename(name: str) -> str:
-    """Spell a type name as rosbag2 does today: ``pkg/msg/Name`` or ``pkg/srv/Name_Event``.
-
-    Old bags (before Foxy) store ``pkg/Name``; rosbags' parser files service parts under
-    ``pkg/srv/msg/``. Both are mapped to the current spelling; anything else is kept.
-    """
-    name = name.strip()
-    if match := _OLD_STYLE.match(name):
-        return f"{match['pkg']}/msg/{match['name']}"
-    if match := _SRV_AS_MSG.match(name):
-        kind = "srv" if match["name"].endswith(_SERVICE_PARTS) else "msg"
-        return f"{match['pkg']}/{kind}/{match['name']}"
-    return name
-
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Selection:
@@ -78,7 +58,7 @@ class Selection:
 
         Args:
             topic: the recorded topic name.
-            msgtype: its type, already normalised (:func:`normalize_typename`).
+            msgtype: its type, normalised (:func:`medkit_replay.msgdefs.normalize_typename`).
 
         Returns:
             ``(role, None)`` for a topic to read; ``(None, reason)`` for a topic whose name

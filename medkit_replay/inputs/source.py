@@ -40,16 +40,14 @@ class InputContext(NamedTuple):
     """What an input needs from the recording that opens it.
 
     Attributes:
-        light: decode the topics the bridges read with light decoders (plain records with
-            the same fields) instead of rosbags' classes.
-        reference: read every MCAP chunk whole (the reference route, never by index).
+        use_index: read uncompressed MCAP chunks through their message indexes (False:
+            every chunk is read whole, the route the index must agree with).
     """
 
     input_index: int
     selection: Selection
     warn: Callable[[str], None]
-    light: bool = False
-    reference: bool = False
+    use_index: bool = True
 
 
 class Input(Protocol):

@@ -9,7 +9,7 @@ import os
 import tempfile
 from typing import TYPE_CHECKING, NamedTuple, Protocol
 
-from medkit_replay.inputs.typestore import NO_DEFINITION, Definition
+from medkit_replay.msgdefs import NO_DEFINITION, Definition
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator

@@ -1,146 +1,33 @@
-"""Decoders for recorded messages: rosbags typestores built from the recording's own definitions.
+"""Decoders for recorded messages: generated from the recording's own definitions or bundled ones.
 
-Falls back to rosbags' ROS 2 Jazzy store plus the bundled ros2_medkit_msgs; reads no bag files.
+rosbags decodes only types the generator does not cover and payloads not in plain little-endian
+CDR; reads no bag files.
 """
 
 from __future__ import annotations
 
-import re
-from functools import cache, lru_cache
-from importlib import resources
-from typing import TYPE_CHECKING, NamedTuple
+from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from rosbags.interfaces import Nodetype
-from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+from rosbags.typesys import Stores, get_typestore
 
-from medkit_replay.inputs.cdr import light_decoder
+from medkit_replay.inputs.cdr import REFUSALS, RejectedError, generated_decoder
 from medkit_replay.inputs.definition_bounds import check_definition
-from medkit_replay.inputs.selection import normalize_typename
+from medkit_replay.msgdefs import Definition, DefinitionError, base_typestore, types_from_definition
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
-    from rosbags.interfaces.typing import BaseDesc, FieldDesc, NameDesc, Typesdict
+    from rosbags.interfaces.typing import FieldDesc, Typesdict
     from rosbags.typesys.store import Typestore
 
-BASE_STORE = Stores.ROS2_JAZZY
-"""rosbags' store for types a recording does not define (has service_msgs, action_msgs...)."""
-
-MEDKIT_PACKAGE = "ros2_medkit_msgs"
-_HEADER = re.compile(r"^(MSG|SRV|IDL|ACTION):\s*(\S+)\s*$")
-_RULE = re.compile(r"^=+\s*$")
-_SERVICE_SUFFIXES = ("_Event", "_Request", "_Response")
-
-
-class Definition(NamedTuple):
-    """A message definition as a recording stores it (MCAP schema, sqlite3 message_definitions)."""
-
-    encoding: str
-    text: str
-
-
-NO_DEFINITION = Definition("", "")
-
-
-class DefinitionError(Exception):
-    """A type can be decoded neither from the recording's definition nor from a bundled one."""
+PLAIN_CDR = b"\x00\x01"
+"""Encapsulation header of plain little-endian CDR: what generated decoders take."""
 
 
 class DecodeError(Exception):
     """One payload could not be decoded."""
-
-
-def _service_base(name: str) -> str:
-    for suffix in _SERVICE_SUFFIXES:
-        if name.endswith(suffix):
-            return name[: -len(suffix)]
-    return name
-
-
-def _sections(text: str, name: str) -> Iterator[tuple[str, str, str]]:
-    """Split a concatenated definition into (kind, type name, body); the first is ``name``."""
-    kind, current = "MSG", name
-    body: list[str] = []
-    lines = text.splitlines()
-    index = 0
-    while index < len(lines):
-        line = lines[index]
-        header = _HEADER.match(lines[index + 1]) if index + 1 < len(lines) else None
-        if _RULE.match(line) and header:
-            yield kind, current, "\n".join(body)
-            kind, current, body = header[1], header[2], []
-            index += 2
-            continue
-        body.append(line)
-        index += 1
-    yield kind, current, "\n".join(body)
-
-
-def _service_types(base: str, body: str) -> Typesdict:
-    """Request, Response and Event types of a ``.srv`` body, as rosbag2 stores service events."""
-    lines = body.splitlines()
-    split = next((i for i, line in enumerate(lines) if line.strip() == "---"), len(lines))
-    types: Typesdict = {}
-    types.update(get_types_from_msg("\n".join(lines[:split]), f"{base}_Request"))
-    types.update(get_types_from_msg("\n".join(lines[split + 1 :]), f"{base}_Response"))
-    event = (
-        "service_msgs/ServiceEventInfo info\n"
-        f"{base}_Request[<=1] request\n{base}_Response[<=1] response\n"
-    )
-    types.update(get_types_from_msg(event, f"{base}_Event"))
-    return types
-
-
-def _fix_leaf(desc: BaseDesc | NameDesc) -> BaseDesc | NameDesc:
-    if desc[0] == Nodetype.NAME:
-        return (Nodetype.NAME, normalize_typename(desc[1]))
-    return desc
-
-
-def _fix_desc(desc: FieldDesc) -> FieldDesc:
-    if desc[0] == Nodetype.ARRAY or desc[0] == Nodetype.SEQUENCE:
-        return (desc[0], (_fix_leaf(desc[1][0]), desc[1][1]))
-    return _fix_leaf(desc)
-
-
-def _fix_names(types: Typesdict) -> Typesdict:
-    """Rename types and references to the spelling bags use (see :func:`normalize_typename`)."""
-    return {
-        normalize_typename(name): (consts, [(field, _fix_desc(desc)) for field, desc in fields])
-        for name, (consts, fields) in types.items()
-    }
-
-
-def types_from_definition(msgtype: str, definition: Definition) -> Typesdict:
-    """Parse a recorded definition (``ros2msg`` or ``ros2idl``, dependencies appended).
-
-    A ``.srv`` text (``---`` between request and response), which rosbag2 stores for service
-    event topics, yields the ``_Request``, ``_Response`` and ``_Event`` types.
-
-    Raises:
-        DefinitionError: unknown encoding or text rosbags cannot parse.
-    """
-    types: Typesdict = {}
-    try:
-        if definition.encoding == "ros2msg":
-            for kind, name, body in _sections(definition.text, msgtype):
-                is_srv = kind == "SRV" or any(line.strip() == "---" for line in body.splitlines())
-                if kind == "ACTION":
-                    continue
-                if is_srv:
-                    types.update(_service_types(_service_base(normalize_typename(name)), body))
-                else:
-                    types.update(get_types_from_msg(body, normalize_typename(name)))
-        elif definition.encoding == "ros2idl":
-            for _, _, body in _sections(definition.text, msgtype):
-                types.update(get_types_from_idl(body))
-        else:
-            raise DefinitionError(f"definition encoding {definition.encoding!r} is not supported")
-    except DefinitionError:
-        raise
-    except Exception as exc:  # rosbags' parsers raise many kinds on bad text
-        raise DefinitionError(f"definition of {msgtype} cannot be parsed: {exc}") from None
-    return _fix_names(types)
 
 
 def _references(desc: FieldDesc) -> Iterator[str]:
@@ -171,65 +58,24 @@ def _complete(types: Typesdict, fallback: Typesdict) -> Typesdict:
     return done
 
 
-@cache
-def bundled_types() -> Typesdict:
-    """The ros2_medkit_msgs types bundled in ``interfaces/``, services as Request/Response/Event."""
-    root = resources.files("medkit_replay.inputs").joinpath("interfaces").joinpath(MEDKIT_PACKAGE)
-    types: Typesdict = {}
-    for entry in sorted(root.joinpath("msg").iterdir(), key=lambda e: e.name):
-        if entry.name.endswith(".msg"):
-            name = f"{MEDKIT_PACKAGE}/msg/{entry.name.removesuffix('.msg')}"
-            types.update(get_types_from_msg(entry.read_text(encoding="utf-8"), name))
-    for entry in sorted(root.joinpath("srv").iterdir(), key=lambda e: e.name):
-        if entry.name.endswith(".srv"):
-            base = f"{MEDKIT_PACKAGE}/srv/{entry.name.removesuffix('.srv')}"
-            types.update(_service_types(base, entry.read_text(encoding="utf-8")))
-    return _fix_names(types)
-
-
-@cache
-def base_typestore() -> Typestore:
-    """rosbags' Jazzy store with the bundled ros2_medkit_msgs registered (shared, never changed)."""
-    store = get_typestore(BASE_STORE)
-    store.register(bundled_types())
-    return store
-
-
 class Decoder:
     """Decodes one type's CDR payloads, trying the recording's definition, then the bundled one.
 
-    With ``light``, a payload is first given to the light decoder generated from the definition
-    tried first (:mod:`medkit_replay.inputs.cdr`); whatever it does not take goes to rosbags.
+    Each candidate definition decodes with its generated decoder (:mod:`medkit_replay.inputs.cdr`);
+    rosbags decodes for a candidate that has none, and every payload whose encapsulation is not
+    plain little-endian CDR (big-endian, parameter lists). A payload the first candidate refuses
+    is tried with the next; the first that fits is used from then on.
     """
 
     def __init__(
-        self,
-        msgtype: str,
-        candidates: list[tuple[str, Typestore]],
-        note: Callable[[str], None],
-        *,
-        light: bool = False,
+        self, msgtype: str, candidates: list[tuple[str, Typestore]], note: Callable[[str], None]
     ) -> None:
         self.msgtype = msgtype
-        self._candidates = candidates
+        self._candidates = [
+            (label, store, generated_decoder(msgtype, store)) for label, store in candidates
+        ]
         self._note = note
-        self._light = light
-        self._fast = light_decoder(msgtype, candidates[0][1]) if light else None
-
-    @property
-    def is_light(self) -> bool:
-        """Whether payloads are tried with a light decoder first."""
-        return self._fast is not None
-
-    def light_decode(self, raw: bytes | memoryview) -> object | None:
-        """The light decoder's message, or None when it has none (then :meth:`decode`)."""
-        fast = self._fast
-        if fast is None or type(raw) is not bytes:
-            return None
-        try:
-            return fast(raw)
-        except Exception:  # rosbags decides, and says why
-            return None
+        self._first = self._candidates[0][2]
 
     def decode(self, raw: bytes | memoryview) -> object:
         """Deserialize one payload.
@@ -237,29 +83,60 @@ class Decoder:
         Raises:
             DecodeError: no candidate definition fits the payload.
         """
-        fast = self._fast
-        if fast is not None and type(raw) is bytes:
+        if type(raw) is not bytes:
+            raw = bytes(raw)
+        first = self._first
+        if first is not None and raw[:2] == PLAIN_CDR:
             try:
-                return fast(raw)
-            except Exception:  # rosbags below decides, and says why
-                pass
-        first_error: Exception | None = None
-        for index, (label, store) in enumerate(self._candidates):
+                return first(raw)
+            except REFUSALS as exc:
+                return self._each(raw, 1, _refused(self.msgtype, exc))
+        return self._each(raw, 0, None)
+
+    def _each(self, raw: bytes, start: int, first_error: Exception | None) -> object:
+        """Try the candidates from ``start`` on; the first that fits moves to the front."""
+        plain = raw[:2] == PLAIN_CDR
+        for index in range(start, len(self._candidates)):
+            label, store, generated = self._candidates[index]
             try:
-                message = store.deserialize_cdr(raw, self.msgtype)
-            except ImportError:
-                raise  # the environment, not the payload: never a silently skipped message
-            except Exception as exc:  # rosbags raises SerdeError, IndexError, ... on bad bytes
+                if generated is not None and plain:
+                    try:
+                        message = generated(raw)
+                    except REFUSALS as exc:
+                        raise _refused(self.msgtype, exc) from None
+                else:
+                    message = _rosbags_decode(store, raw, self.msgtype)
+            except DecodeError as exc:
                 first_error = first_error or exc
                 continue
             if index:
                 # Keep using the definition that fits; say once that the first choice did not.
                 self._candidates.insert(0, self._candidates.pop(index))
+                self._first = generated
                 self._note(f"{self._candidates[1][0]} does not fit the data; used the {label}")
-                if self._light:
-                    self._fast = light_decoder(self.msgtype, store)
             return message
         raise DecodeError(str(first_error))
+
+
+def _refused(msgtype: str, exc: Exception) -> DecodeError:
+    """A generated decoder's refusal, worded as rosbags words its own."""
+    if isinstance(exc, RejectedError):
+        return DecodeError(str(exc))
+    return DecodeError(f"Could not deserialize {msgtype!r}: {exc}")
+
+
+def _rosbags_decode(store: Typestore, raw: bytes, msgtype: str) -> object:
+    """rosbags' decoding of one payload.
+
+    Raises:
+        DecodeError: rosbags refuses the payload.
+    """
+    try:
+        return store.deserialize_cdr(raw, msgtype)
+    except ImportError:
+        raise  # the environment, not the payload: never a silently skipped message
+    except Exception as exc:  # rosbags raises SerdeError, IndexError, ... on bad bytes
+        raise DecodeError(str(exc)) from None
 
 
 @lru_cache(maxsize=256)
@@ -285,7 +162,7 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
 
 
 def make_decoder(
-    msgtype: str, definition: Definition, note: Callable[[str], None], *, light: bool = False
+    msgtype: str, definition: Definition, note: Callable[[str], None]
 ) -> tuple[Decoder, str | None]:
     """A decoder for ``msgtype`` and, if the recorded definition is unusable, why.
 
@@ -293,7 +170,6 @@ def make_decoder(
         msgtype: the normalised type name.
         definition: what the recording stores for it (may be empty).
         note: told once if the recorded definition turns out not to fit the data.
-        light: try a light decoder first (plain records, not rosbags' classes).
 
     Raises:
         DefinitionError: neither the recording nor the bundled types define ``msgtype``.
@@ -311,4 +187,4 @@ def make_decoder(
     if not candidates:
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
-    return Decoder(msgtype, candidates, note, light=light), problem
+    return Decoder(msgtype, candidates, note), problem

@@ -28,8 +28,8 @@ from typing import IO, TYPE_CHECKING, BinaryIO, Protocol, cast
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from medkit_replay.inputs.typestore import MEDKIT_PACKAGE, Definition, types_from_definition
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.msgdefs import MEDKIT_PACKAGE, Definition, types_from_definition
 from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.version import __version__
 

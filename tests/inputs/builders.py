@@ -18,7 +18,7 @@ from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import CompressionFormat, CompressionMode, StoragePlugin
 from rosbags.rosbag2.storage_mcap import McapWriter
 
-from medkit_replay.inputs.typestore import base_typestore
+from medkit_replay.msgdefs import base_typestore
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Sequence

@@ -8,7 +8,7 @@ import pytest
 from mcap.writer import CompressionType, Writer
 
 from medkit_replay.inputs import open_recording
-from medkit_replay.inputs.typestore import base_typestore
+from medkit_replay.msgdefs import base_typestore
 
 if TYPE_CHECKING:
     from pathlib import Path

@@ -15,8 +15,8 @@ from medkit_replay.inputs.selection import (
     LOG_TYPE,
     REPORT_FAULT_EVENT_TYPE,
     Selection,
-    normalize_typename,
 )
+from medkit_replay.msgdefs import normalize_typename
 
 DEFAULT = Selection()
 

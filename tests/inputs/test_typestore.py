@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import pytest
 
-from medkit_replay.inputs.typestore import (
-    DecodeError,
+from medkit_replay.inputs.typestore import DecodeError, make_decoder
+from medkit_replay.msgdefs import (
     Definition,
     DefinitionError,
     base_typestore,
     bundled_types,
-    make_decoder,
     types_from_definition,
 )
 from tests.inputs.builders import INTERFACES, TS, diag, report_fault

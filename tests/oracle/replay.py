@@ -1,12 +1,25 @@
-"""A replay written plainly: rosbags decodes every message, chunks are read whole, bridges and the
-manager handle request and record objects one by one (the shape of the replay before speed work).
+"""A replay written plainly: rosbags reads and decodes the messages, bridges and the manager
+handle request and record objects one by one (the shape of the replay before speed work).
 
 An oracle for ``medkit_replay.replay``: the report sections the engine produces must agree.
+A recording rosbags reads whole is read with ``rosbags.rosbag2.Reader`` and every payload
+deserialized by rosbags (``Typestore.deserialize_cdr``), from the definition the product would
+choose: the recorded one (as ``inputs.typestore`` builds its store), else the bundled one, the
+first that fits kept. Not ``AnyReader``: it parses every recorded definition with rosbags' own
+parser and refuses rosbag2's service-event definitions, which the replay reads. What rosbags
+cannot read (damaged files, bare files without a readable layout, JSON-lines scripts) goes
+through the product's reader with every MCAP chunk read whole, and so through its generated
+decoders: for those the oracle checks the engine, not the decoding.
 """
 
 from __future__ import annotations
 
+import heapq
+from itertools import count
 from typing import TYPE_CHECKING
+
+from rosbags.interfaces import MessageDefinitionFormat
+from rosbags.rosbag2 import Reader
 
 from medkit_replay.bridges.action_status import ActionStatusBridge
 from medkit_replay.bridges.diagnostic import DiagnosticBridge
@@ -17,8 +30,10 @@ from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
-from medkit_replay.inputs import open_recording
+from medkit_replay.inputs import Message, Selection, open_recording
+from medkit_replay.inputs.typestore import _recorded_store
 from medkit_replay.model import ClearRequest, ReportRequest
+from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore, normalize_typename
 from medkit_replay.outputs.json_report import (
     clear_dict,
     cluster_dict,
@@ -33,8 +48,11 @@ from tests.oracle.bridges import oracle_diagnostic, oracle_log
 from tests.oracle.manager import oracle_report
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Iterator, Sequence
     from pathlib import Path
+
+    from rosbags.interfaces import Connection
+    from rosbags.typesys.store import Typestore
 
 ENGINE_SECTIONS = (
     "faults",
@@ -65,32 +83,29 @@ def oracle_sections(inputs: Sequence[Path], configs: Sequence[Path]) -> dict[str
     services = ServiceCallReplayer()
     recorded = _recorded_codes(inputs)
     messages = 0
-    with open_recording(
-        list(inputs),
+    selection = Selection(
         rosout=log is not None,
         diagnostics_topics=(diagnostic.topic,),
         rosout_topic=log.topic if log is not None else "/rosout",
-        light=False,
-        reference=True,
-    ) as recording:
-        for message in recording.messages():
-            messages += 1
-            timeline.advance(message.t_ns)
-            t_ns, topic, msg = message.t_ns, message.topic, message.msg
-            requests: Sequence[ReportRequest | ClearRequest | tuple[object, ...]] = ()
-            if message.role == "script":
-                assert isinstance(msg, ReportRequest | ClearRequest)
-                requests = (msg,)
-            elif message.role == "action_status":
-                requests = action.on_message(t_ns, topic, msg)
-            elif message.role in ("report_fault", "clear_fault"):
-                requests = services.on_message(t_ns, topic, message.msgtype, msg)
-            elif diagnostic.wants(topic, message.msgtype):
-                requests = oracle_diagnostic(diagnostic, t_ns, topic, msg)
-            elif log is not None and log.wants(topic, message.msgtype):
-                requests = oracle_log(log, t_ns, topic, msg)
-            for request in requests:
-                _apply(manager, _as_request(request), recorded)
+    )
+    for message in oracle_messages(inputs, selection):
+        messages += 1
+        timeline.advance(message.t_ns)
+        t_ns, topic, msg = message.t_ns, message.topic, message.msg
+        requests: Sequence[ReportRequest | ClearRequest | tuple[object, ...]] = ()
+        if message.role == "script":
+            assert isinstance(msg, ReportRequest | ClearRequest)
+            requests = (msg,)
+        elif message.role == "action_status":
+            requests = action.on_message(t_ns, topic, msg)
+        elif message.role in ("report_fault", "clear_fault"):
+            requests = services.on_message(t_ns, topic, message.msgtype, msg)
+        elif diagnostic.wants(topic, message.msgtype):
+            requests = oracle_diagnostic(diagnostic, t_ns, topic, msg)
+        elif log is not None and log.wants(topic, message.msgtype):
+            requests = oracle_log(log, t_ns, topic, msg)
+        for request in requests:
+            _apply(manager, _as_request(request), recorded)
     out = manager.output
     faults = manager.faults()
     correlation = manager.correlation
@@ -138,14 +153,11 @@ def _recorded_codes(inputs: Sequence[Path]) -> set[str]:
         return set()
     services = ServiceCallReplayer()
     codes: set[str] = set()
-    with open_recording(
-        bags, only_roles=("report_fault",), light=False, reference=True
-    ) as recording:
-        for message in recording.messages():
-            for request in services.on_message(
-                message.t_ns, message.topic, message.msgtype, message.msg
-            ):
-                codes.add(request.fault_code)
+    for message in oracle_messages(bags, Selection(only_roles=frozenset({"report_fault"}))):
+        for request in services.on_message(
+            message.t_ns, message.topic, message.msgtype, message.msg
+        ):
+            codes.add(request.fault_code)
     return codes
 
 
@@ -176,3 +188,96 @@ def _apply(
         oracle_report(manager, request)
     else:
         manager.clear(request)
+
+
+def oracle_messages(inputs: Sequence[Path], selection: Selection) -> Iterator[Message]:
+    """The selected messages of every input, merged by (log time, input, order read)."""
+    streams = [_rosbags_messages(path, index, selection) for index, path in enumerate(inputs)]
+    for index, path in enumerate(inputs):
+        if streams[index] is None:
+            streams[index] = _product_messages(path, index, selection)
+    serial = count()
+    keyed = [[(m.t_ns, m.input_index, next(serial), m) for m in stream or []] for stream in streams]
+    return (item[3] for item in heapq.merge(*keyed))
+
+
+def _product_messages(path: Path, index: int, selection: Selection) -> list[Message]:
+    """The product's reader, every chunk read whole (for what rosbags cannot read)."""
+    roles = tuple(selection.only_roles) if selection.only_roles is not None else None
+    with open_recording(
+        [path],
+        rosout=selection.rosout,
+        rosout_topic=selection.rosout_topic,
+        diagnostics_topics=selection.diagnostics_topics,
+        extra_topics=selection.extra_topics,
+        only_roles=roles,
+        use_index=False,
+    ) as recording:
+        return [m._replace(input_index=index) for m in recording.messages()]
+
+
+def _rosbags_messages(path: Path, index: int, selection: Selection) -> list[Message] | None:
+    """Every selected message rosbags reads and decodes, or None if rosbags cannot read it."""
+    if path.suffix == ".jsonl":
+        return None
+    decoders: dict[int, _RosbagsDecoder | None] = {}
+    out: list[Message] = []
+    try:
+        with Reader(path) as reader:
+            read = 0
+            for connection, t_ns, raw in reader.messages():
+                read += 1
+                if connection.id not in decoders:
+                    decoders[connection.id] = _decoder_for(connection, selection)
+                decoder = decoders[connection.id]
+                if decoder is None:
+                    continue
+                msg = decoder.decode(raw)
+                if msg is not None:
+                    role = decoder.role
+                    topic, msgtype = connection.topic, decoder.msgtype
+                    out.append(Message(t_ns, index, topic, msgtype, role, msg))  # type: ignore[arg-type]
+            if read != reader.message_count:  # read short without a word (seen on zstd chunks)
+                return None
+    except Exception:  # rosbags cannot read it: the product's reader then
+        return None
+    return out
+
+
+class _RosbagsDecoder:
+    """rosbags' deserializer over the candidate definitions, the first that fits kept."""
+
+    def __init__(self, role: str, msgtype: str, stores: list[Typestore]) -> None:
+        self.role, self.msgtype, self.stores = role, msgtype, stores
+
+    def decode(self, raw: bytes) -> object | None:
+        for index, store in enumerate(self.stores):
+            try:
+                msg = store.deserialize_cdr(raw, self.msgtype)
+            except Exception:  # rosbags refuses: the next definition
+                continue
+            self.stores.insert(0, self.stores.pop(index))
+            return msg
+        return None  # skipped, as the replay skips a payload no definition fits
+
+
+def _decoder_for(connection: Connection, selection: Selection) -> _RosbagsDecoder | None:
+    msgtype = normalize_typename(connection.msgtype)
+    role, _ = selection.classify(connection.topic, msgtype)
+    serialization = getattr(connection.ext, "serialization_format", "cdr")
+    if role is None or serialization != "cdr":
+        return None
+    kind = {MessageDefinitionFormat.MSG: "ros2msg", MessageDefinitionFormat.IDL: "ros2idl"}
+    definition = (
+        Definition(kind[connection.msgdef.format], connection.msgdef.data)
+        if connection.msgdef.format in kind
+        else NO_DEFINITION
+    )
+    stores: list[Typestore] = []
+    if definition.text.strip():
+        recorded = _recorded_store(msgtype, definition)
+        if not isinstance(recorded, str):
+            stores.append(recorded[1])
+    if msgtype in base_typestore().fielddefs:
+        stores.append(base_typestore())
+    return _RosbagsDecoder(role, msgtype, stores) if stores else None

@@ -60,9 +60,9 @@ def mixed_bag(tmp_path: Path, frames: int = 24) -> Path:
     return storage_file(write_bag(tmp_path / "bag", recs, chunk_every=8))
 
 
-def read(path: Path, *, reference: bool) -> object:
+def read(path: Path, *, use_index: bool) -> object:
     try:
-        with open_recording([path], rosout=True, reference=reference) as recording:
+        with open_recording([path], rosout=True, use_index=use_index) as recording:
             messages = [(m.t_ns, m.topic, plain(m.msg)) for m in recording.messages()]
             return messages, list(recording.warnings), recording.inputs
     except InputError as exc:
@@ -83,10 +83,10 @@ def test_the_index_route_is_taken_and_reads_the_same(
         return result
 
     monkeypatch.setattr(McapFile, "_by_index", spy)
-    fast = read(path, reference=False)
+    fast = read(path, use_index=True)
     assert taken  # chunks were read through their message indexes
     assert sum(taken) >= 60  # of 72: a chunk with little to skip is read whole
-    assert fast == read(path, reference=True)
+    assert fast == read(path, use_index=False)
 
 
 def test_flipped_bytes_read_the_same_both_ways(tmp_path: Path) -> None:
@@ -96,7 +96,7 @@ def test_flipped_bytes_read_the_same_both_ways(tmp_path: Path) -> None:
     offsets = [i for i in range(len(data)) if data[i] != 7][::3] + list(range(0, len(data), 4001))
     for offset in offsets:
         path = flipped(source, tmp_path / "flip.mcap", offset)
-        assert read(path, reference=False) == read(path, reference=True), offset
+        assert read(path, use_index=True) == read(path, use_index=False), offset
 
 
 def test_cuts_read_the_same_both_ways(tmp_path: Path) -> None:
@@ -104,7 +104,7 @@ def test_cuts_read_the_same_both_ways(tmp_path: Path) -> None:
     size = source.stat().st_size
     for cut in range(0, size, 97):
         path = truncated(source, tmp_path / "cut.mcap", cut)
-        assert read(path, reference=False) == read(path, reference=True), cut
+        assert read(path, use_index=True) == read(path, use_index=False), cut
 
 
 @pytest.mark.parametrize("damage", ["none", "flip", "cut"])
@@ -122,6 +122,6 @@ def test_the_quick_chunk_parser_reads_as_the_careful_one(
             if damage == "flip"
             else truncated(source, tmp_path / "d.mcap", middle)
         ]
-    quick = [read(path, reference=True) for path in paths]
+    quick = [read(path, use_index=False) for path in paths]
     monkeypatch.setattr(McapFile, "_plain_records", lambda *_: None)
-    assert [read(path, reference=True) for path in paths] == quick
+    assert [read(path, use_index=False) for path in paths] == quick

@@ -1,20 +1,26 @@
-"""Light decoders against rosbags' deserializer on random messages, intact and damaged.
+"""Generated decoders against rosbags' deserializer on random messages, intact and damaged.
 
 Random DiagnosticArrays, Logs, GoalStatusArrays, service events and FaultEvents are serialized
-with rosbags and decoded both ways: the fields must agree one by one. A damaged payload must be
-refused by the light decoder whenever rosbags refuses it, and decode alike otherwise.
+with rosbags and decoded both ways: the fields must agree one by one (a disagreement fails). A
+damaged payload gets the same verdict both ways: refused by the generated decoder exactly when
+rosbags refuses it, and decoded alike otherwise. A bug in generated code propagates, and its
+traceback shows the generated line.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import traceback
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from medkit_replay.inputs.cdr import DiagnosticArrayView, generate, light_decoder
-from medkit_replay.inputs.typestore import base_typestore, make_decoder
+from medkit_replay.inputs import cdr
+from medkit_replay.inputs.cdr import REFUSALS, DiagnosticArrayView, generate, generated_decoder
+from medkit_replay.inputs.typestore import PLAIN_CDR, DecodeError, make_decoder
+from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore
 from tests.speed.support import plain
 
 if TYPE_CHECKING:
@@ -252,28 +258,40 @@ STRATEGIES: dict[str, Callable[[], st.SearchStrategy[object]]] = {
 }
 
 
+REFUSED = "refused"
+
+
 def light(msgtype: str) -> Callable[[bytes], object]:
-    decode = light_decoder(msgtype, TS)
+    decode = generated_decoder(msgtype, TS)
     assert decode is not None
     return decode
 
 
-def both(msgtype: str, raw: bytes) -> tuple[object, object]:
-    """What rosbags and the light decoder make of a payload (an exception's type otherwise)."""
+def both(msgtype: str, raw: bytes) -> tuple[object, object, object]:
+    """What rosbags, the generated decoder and the product's Decoder make of a payload.
+
+    A refusal is :data:`REFUSED`; anything else a generated decoder raises is a bug and
+    propagates.
+    """
     try:
         expected: object = plain(TS.deserialize_cdr(raw, msgtype))
-    except Exception as exc:  # rosbags' verdict, whatever it is
-        expected = ("refused", type(exc).__name__)
+    except Exception:  # rosbags' verdict, whatever its kind
+        expected = REFUSED
     try:
         got: object = plain(light(msgtype)(raw))
-    except Exception:  # the light decoder refuses: rosbags decides then
-        got = None
-    return expected, got
+    except REFUSALS:
+        got = REFUSED
+    decoder, _ = make_decoder(msgtype, NO_DEFINITION, pytest.fail)
+    try:
+        product: object = plain(decoder.decode(raw))
+    except DecodeError:
+        product = REFUSED
+    return expected, got, product
 
 
-def test_every_hot_type_has_a_light_decoder() -> None:
+def test_every_hot_type_has_a_generated_decoder() -> None:
     for msgtype in HOT_TYPES:
-        assert light_decoder(msgtype, TS) is not None
+        assert generated_decoder(msgtype, TS) is not None
     array = new(
         DIAGNOSTIC_ARRAY,
         header=new("std_msgs/msg/Header", stamp=new(TIME, sec=1, nanosec=2), frame_id=""),
@@ -289,8 +307,8 @@ def test_every_hot_type_has_a_light_decoder() -> None:
 def test_light_decoders_agree_with_rosbags(msgtype: str, data: st.DataObject) -> None:
     message = data.draw(STRATEGIES[msgtype]())
     raw = bytes(TS.serialize_cdr(message, msgtype))
-    expected, got = both(msgtype, raw)
-    assert got == expected == plain(message)
+    expected, got, product = both(msgtype, raw)
+    assert got == expected == product == plain(message)
     if msgtype == DIAGNOSTIC_ARRAY:
         view = light(msgtype)(raw)
         assert isinstance(view, DiagnosticArrayView)
@@ -320,8 +338,9 @@ def test_damaged_payloads_are_refused_whenever_rosbags_refuses(
         raw += bytes(data.draw(st.integers(1, 9)))
     else:
         raw[at : at + 4] = data.draw(st.integers(0, 2**32 - 1)).to_bytes(4, "little")
-    expected, got = both(msgtype, bytes(raw))
-    if got is not None:  # the light decoder took it: rosbags must have, with the same fields
+    expected, got, product = both(msgtype, bytes(raw))
+    assert product == expected  # refused both ways, or decoded alike
+    if raw[:2] == PLAIN_CDR:  # other encapsulations are rosbags' alone
         assert got == expected
 
 
@@ -329,23 +348,16 @@ def test_damaged_payloads_are_refused_whenever_rosbags_refuses(
 @given(message=diagnostic_arrays())
 def test_a_big_endian_payload_goes_to_rosbags(message: object) -> None:
     raw = bytes(TS.serialize_cdr(message, DIAGNOSTIC_ARRAY, little_endian=False))
-    with pytest.raises(Exception):  # noqa: B017  # refused: not the light decoder's
-        light(DIAGNOSTIC_ARRAY)(raw)
-    decoder, _ = make_decoder(DIAGNOSTIC_ARRAY, _no_definition(), lambda _: None, light=True)
-    assert plain(decoder.decode(raw)) == plain(TS.deserialize_cdr(raw, DIAGNOSTIC_ARRAY))
-
-
-def _no_definition() -> Any:
-    from medkit_replay.inputs.typestore import NO_DEFINITION  # noqa: PLC0415
-
-    return NO_DEFINITION
+    decoder, _ = make_decoder(DIAGNOSTIC_ARRAY, NO_DEFINITION, pytest.fail)
+    decoded = decoder.decode(raw)
+    assert not isinstance(decoded, DiagnosticArrayView)  # routed by its header, to rosbags
+    assert not dataclasses.is_dataclass(decoded) or type(decoded).__module__ != cdr.__name__
+    assert plain(decoded) == plain(TS.deserialize_cdr(raw, DIAGNOSTIC_ARRAY))
 
 
 def test_a_definition_other_than_the_standard_gets_its_own_decoder() -> None:
     # A DiagnosticStatus without hardware_id: the hand-written decoder does not apply; the
     # generated one follows the recording's definition, as rosbags does.
-    from medkit_replay.inputs.typestore import Definition  # noqa: PLC0415
-
     text = (
         "std_msgs/Header header\nDiagnosticStatus[] status\n"
         "================================================================================\n"
@@ -355,16 +367,42 @@ def test_a_definition_other_than_the_standard_gets_its_own_decoder() -> None:
         "================================================================================\n"
         "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
     )
-    decoder, problem = make_decoder(
-        DIAGNOSTIC_ARRAY, Definition("ros2msg", text), lambda _: None, light=True
-    )
+    decoder, problem = make_decoder(DIAGNOSTIC_ARRAY, Definition("ros2msg", text), pytest.fail)
     assert problem is None
-    assert decoder.is_light
     raw = bytes.fromhex("00010000") + bytes(8) + b"\x01\x00\x00\x00\x00\x00\x00\x00"
     raw += b"\x01\x00\x00\x00" + b"\x02\x00\x00\x00" + b"\x02\x00\x00\x00a\x00\x00\x00"
     raw += b"\x03\x00\x00\x00ok\x00"
     message = decoder.decode(raw)
     assert not isinstance(message, DiagnosticArrayView)
+    assert type(message).__module__ == cdr.__name__  # a generated record, not rosbags' class
     assert plain(message)["status"] == [  # type: ignore[index]
         {"level": ("int", 2), "name": ("str", "a"), "message": ("str", "ok")}
     ]
+
+
+def test_a_bug_in_generated_code_propagates(monkeypatch: pytest.MonkeyPatch) -> None:
+    original = cdr._Generator.prim
+
+    def forgetful(self: cdr._Generator, typ: str) -> str:
+        key = original(self, typ)
+        del self.names[key]  # the generated code now calls a name its namespace lacks
+        return key
+
+    monkeypatch.setattr(cdr._Generator, "prim", forgetful)
+    monkeypatch.setattr(cdr, "_CACHE", {})
+    decoder, _ = make_decoder(TIME, NO_DEFINITION, pytest.fail)
+    raw = bytes(TS.serialize_cdr(new(TIME, sec=1, nanosec=2), TIME))
+    with pytest.raises(NameError):  # a bug, never a refusal nor a detour through rosbags
+        decoder.decode(raw)
+
+
+def test_a_traceback_through_a_generated_decoder_shows_its_line() -> None:
+    decode, source = generate(TIME, TS)
+    with pytest.raises(REFUSALS) as caught:
+        decode(b"\x00\x01\x00\x00\x01")  # cut inside ``sec``
+    frame = traceback.extract_tb(caught.value.__traceback__)[-1]
+    assert frame.filename.startswith(f"<medkit-replay decoder of {TIME} #")
+    assert frame.lineno is not None
+    assert frame.line == source.splitlines()[frame.lineno - 1].strip()
+    assert "(raw, p)" in frame.line
+    assert "u_int32(raw, p)" in "".join(traceback.format_exception(caught.value))

@@ -1,7 +1,8 @@
 """Every sample and fixture recording, replayed and compared with the plain oracle's conclusions.
 
-Same engine sections of the report; same messages field by field, same raw payloads and
-warnings whether MCAP chunks are read through their message indexes or whole.
+Same engine sections of the report; same messages field by field as the oracle reads and
+decodes them (rosbags, where it reads the recording), and the same messages and warnings whether
+MCAP chunks are read through their message indexes or whole.
 """
 
 from __future__ import annotations
@@ -11,8 +12,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from medkit_replay.errors import InputError
-from medkit_replay.inputs import open_recording
+from medkit_replay.inputs import Message, Selection, open_recording
 from medkit_replay.pipeline import replay
+from tests.oracle.replay import oracle_messages
 from tests.speed.support import FIXTURES, RULES, SAMPLES, plain, report_both_ways
 
 if TYPE_CHECKING:
@@ -54,24 +56,24 @@ def test_several_inputs_merged_conclude_what_the_oracle_does(log_bridge_on: Path
     assert fast == reference
 
 
-def _messages(
-    recording: Path, *, light: bool, reference: bool
-) -> tuple[list[tuple[object, ...]], list[str]]:
+def _messages(recording: Path, *, use_index: bool) -> tuple[list[tuple[object, ...]], list[str]]:
     with open_recording(
-        [recording], rosout=True, light=light, reference=reference, extra_topics=["/chatter"]
+        [recording], rosout=True, use_index=use_index, extra_topics=["/chatter"]
     ) as opened:
-        messages: list[tuple[object, ...]] = [
-            (m.t_ns, m.input_index, m.topic, m.msgtype, m.role, plain(m.msg))
-            for m in opened.messages()
-        ]
+        messages = [_fields(m) for m in opened.messages()]
         return messages, list(opened.warnings)
 
 
+def _fields(m: Message) -> tuple[object, ...]:
+    return (m.t_ns, m.input_index, m.topic, m.msgtype, m.role, plain(m.msg))
+
+
 @pytest.mark.parametrize("recording", RECORDINGS, ids=IDS)
-def test_light_messages_equal_rosbags_messages(recording: Path) -> None:
+def test_messages_equal_the_oracles(recording: Path) -> None:
     try:
-        expected = _messages(recording, light=False, reference=True)
+        messages, warnings = _messages(recording, use_index=True)
     except InputError:
         return
-    assert _messages(recording, light=True, reference=False) == expected
-    assert _messages(recording, light=False, reference=False) == expected
+    assert _messages(recording, use_index=False) == (messages, warnings)
+    selection = Selection(rosout=True, extra_topics=("/chatter",))
+    assert [_fields(m) for m in oracle_messages([recording], selection)] == messages
