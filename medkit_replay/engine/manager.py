@@ -136,8 +136,8 @@ class FaultManager:
             self.resolver,
             self.correlation,
         )
-        report_row, event_row, transition_row = self.report_row, self.event_row, self.transition_row
-        event_rows, count_event = self._event_row, self._count_event
+        report_row, transition_row = self.report_row, self.transition_row
+        event = self._event
 
         def report_fields(
             t_ns: int,
@@ -209,35 +209,12 @@ class FaultManager:
                  True, None, fault.status, fault.counter, conf, heal, withheld)
             )  # fmt: skip
             if kind is not None:
-                count_event(kind)
-                event_row(event_rows(t_ns, kind, fault))
+                event(t_ns, kind, fault)
             if not is_new and before != "HEALED" and after == "HEALED":
-                count_event("fault_cleared")
-                event_row(event_rows(t_ns, "fault_cleared", fault))
+                event(t_ns, "fault_cleared", fault)
             return True
 
         return report_fields
-
-    def _count_event(self, kind: EventKind) -> None:
-        counts = self.output.event_counts
-        counts[kind] = counts.get(kind, 0) + 1
-
-    def _event_row(
-        self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
-    ) -> Row:
-        """A FaultEvent as a row: the fault's state now, with its correlation view."""
-        code = fault.fault_code
-        if self.correlation is not None:
-            entry = self.correlation.muted_entry(code)
-            muted, root = entry is not None, entry.root_cause_code if entry is not None else None
-            clusters = self.correlation.cluster_ids_of(code)
-        else:
-            muted, root, clusters = False, None, ()
-        return (
-            t_ns, kind, code, fault.severity, fault.description, fault.first_occurred_ns,
-            fault.last_occurred_ns, fault.last_passed_ns, fault.occurrence_count, fault.status,
-            fault.sorted_sources(), muted, root, clusters, auto,
-        )  # fmt: skip
 
     # -- ClearFault ------------------------------------------------------------------------
 
@@ -335,8 +312,22 @@ class FaultManager:
     def _event(
         self, t_ns: int, kind: EventKind, fault: FaultRecord, auto: tuple[str, ...] = ()
     ) -> None:
-        self._count_event(kind)
-        self.event_row(self._event_row(t_ns, kind, fault, auto))
+        """Count and record a FaultEvent: the fault's state now, with its correlation view."""
+        counts = self.output.event_counts
+        counts[kind] = counts.get(kind, 0) + 1
+        code = fault.fault_code
+        correlation = self.correlation
+        if correlation is not None:
+            entry = correlation.muted_entry(code)
+            muted, root = entry is not None, entry.root_cause_code if entry is not None else None
+            clusters = correlation.cluster_ids_of(code)
+        else:
+            muted, root, clusters = False, None, ()
+        self.event_row(
+            (t_ns, kind, code, fault.severity, fault.description, fault.first_occurred_ns,
+             fault.last_occurred_ns, fault.last_passed_ns, fault.occurrence_count, fault.status,
+             fault.sorted_sources(), muted, root, clusters, auto)
+        )  # fmt: skip
 
     def _clear_record(
         self, request: ClearRequest, *, success: bool, message: str, auto: tuple[str, ...]

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass, field
-from typing import NamedTuple
 
 from medkit_replay.engine.debounce import DebounceConfig, clamp, compute_status
 from medkit_replay.model import NearMiss, Status
@@ -48,12 +47,9 @@ class FaultRecord:
         return self._sorted_sources
 
 
-class ReportOutcome(NamedTuple):
-    """What one applied report did: status before/after and whether it was a new occurrence."""
-
-    before: Status | None
-    after: Status | None
-    is_new: bool
+ReportOutcome = tuple["Status | None", "Status | None", bool]
+"""What one applied report did: status before, status after, whether it began an occurrence
+(a plain tuple: one is made per report, and a named one costs several times more)."""
 
 
 class FaultStorage:
@@ -129,7 +125,7 @@ class FaultStorage:
         crit_hit = config.critical_immediate_confirm and severity == CRITICAL
         if fault is None:
             if not failed:
-                return ReportOutcome(None, None, is_new=False)
+                return (None, None, False)
             status = "CONFIRMED" if crit_hit else compute_status(-1, None, config)
             assert status is not None  # counter -1 always yields a status
             fault = FaultRecord(
@@ -146,12 +142,12 @@ class FaultStorage:
             self._near_miss(fault, config, severity, source_id, t_ns)
             if self.tracks_prefailed:
                 self.watch(fault)
-            return ReportOutcome(None, status, is_new=True)
+            return (None, status, True)
 
         before = fault.status
         if before == "CLEARED":
             if not failed:
-                return ReportOutcome(before, before, is_new=False)
+                return (before, before, False)
             fault.counter = -1
             fault.first_occurred_ns = fault.last_occurred_ns = fault.last_failed_ns = t_ns
             fault.add_source(source_id)
@@ -165,7 +161,7 @@ class FaultStorage:
             self._near_miss(fault, config, severity, source_id, t_ns)
             if self.tracks_prefailed:
                 self.watch(fault)
-            return ReportOutcome(before, status, is_new=True)
+            return (before, status, True)
 
         fault.counter = clamp(fault.counter, config)
         if failed:
@@ -186,7 +182,7 @@ class FaultStorage:
             self._near_miss(fault, config, severity, source_id, t_ns)
         if self.tracks_prefailed:
             self.watch(fault)
-        return ReportOutcome(before, new_status, is_new=False)
+        return (before, new_status, False)
 
     def clear(self, fault_code: str) -> bool:
         """Mark a fault CLEARED; False when the code was never reported."""

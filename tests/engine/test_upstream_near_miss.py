@@ -359,7 +359,7 @@ def test_nm22_passed_report_on_unknown_fault_writes_nothing() -> None:
     """NM-22 PassedReportOnUnknownFaultWritesNothing."""
     storage = FaultStorage()
     outcome = storage.report("NEVER_REPORTED", PASSED, WARN, "", SRC, t(0), FOUR_STRIKE)
-    assert outcome.is_new is False
+    assert outcome[2] is False
     assert len(storage.faults) == 0
     assert series(storage, "NEVER_REPORTED") == []
     assert storage.near_misses == {}

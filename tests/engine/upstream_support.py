@@ -292,7 +292,7 @@ def run_storage(case: Case) -> FaultStorage:
                 t_ns,
                 step.config or case.config,
             )
-            returned = outcome.is_new
+            returned = outcome[2]
         elif step.op == "CLEAR":
             returned = storage.clear(step.code)
         else:

@@ -37,7 +37,7 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
         _record(manager, request, reason, None, None)
         return False
     config = sanitize(manager.resolver.resolve(request.source_id))
-    outcome = manager.storage.report(
+    before, after, is_new = manager.storage.report(
         request.fault_code,
         request.event_type,
         request.severity,
@@ -50,13 +50,13 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
     if fault is None:
         _record(manager, request, None, None, config)
         return True
-    if outcome.before != outcome.after and outcome.after is not None:
+    if before != after and after is not None:
         output.transitions.append(
             Transition(
                 t_ns=request.t_ns,
                 fault_code=request.fault_code,
-                from_status=outcome.before,
-                to_status=outcome.after,
+                from_status=before,
+                to_status=after,
                 cause="report",
                 source_id=request.source_id,
             )
@@ -76,8 +76,8 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
                 )
             )
     kind: EventKind | None = None
-    if outcome.after == "CONFIRMED":
-        again = not outcome.is_new and outcome.before == "CONFIRMED"
+    if after == "CONFIRMED":
+        again = not is_new and before == "CONFIRMED"
         kind = "fault_updated" if again else "fault_confirmed"
     _record(
         manager,
@@ -89,7 +89,7 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
     )
     if kind is not None and not muted:
         _event(manager, request.t_ns, kind, fault)
-    if not outcome.is_new and outcome.before != "HEALED" and outcome.after == "HEALED":
+    if not is_new and before != "HEALED" and after == "HEALED":
         _event(manager, request.t_ns, "fault_cleared", fault)
     return True
 
