@@ -75,6 +75,17 @@ class Result:
     summary: Summary
     config: dict[str, object] = field(default_factory=dict)
 
+    def span(self) -> tuple[int | None, int | None]:
+        """The recording's first and last log time: its inputs' spans and the messages read."""
+        summary = self.summary
+        starts = [i.start_ns for i in self.inputs if i.start_ns is not None]
+        ends = [i.end_ns for i in self.inputs if i.end_ns is not None]
+        if summary.start_ns is not None:
+            starts.append(summary.start_ns)
+        if summary.end_ns is not None:
+            ends.append(summary.end_ns)
+        return min(starts, default=None), max(ends, default=None)
+
     def fault(self, fault_code: str) -> FaultSnapshot | None:
         """The final state of one fault, or None when it was never reported."""
         return next((f for f in self.faults if f.fault_code == fault_code), None)

@@ -94,12 +94,7 @@ def run_kind(path: Path) -> str:
 def summarize(path: str, kind: str, result: Result) -> RunSummary:
     """Reduce a replay's result to a run summary."""
     summary = result.summary
-    starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
-    ends = [i.end_ns for i in result.inputs if i.end_ns is not None]
-    if summary.start_ns is not None:
-        starts.append(summary.start_ns)
-    if summary.end_ns is not None:
-        ends.append(summary.end_ns)
+    start_ns, end_ns = result.span()
     failed_reports: Counter[str] = Counter(
         r.fault_code for r in result.reports if r.accepted and r.event_type == "FAILED"
     )
@@ -119,8 +114,8 @@ def summarize(path: str, kind: str, result: Result) -> RunSummary:
     return RunSummary(
         path=path,
         kind=kind,
-        start_ns=min(starts, default=None),
-        end_ns=max(ends, default=None),
+        start_ns=start_ns,
+        end_ns=end_ns,
         messages=summary.messages_read,
         faults_by_status=tuple((s, summary.faults_by_status.get(s, 0)) for s in STATUSES),
         top_codes=tuple(ranked[:TOP_CODES]),

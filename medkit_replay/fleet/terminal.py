@@ -6,11 +6,10 @@ characters escaped); away from a terminal the summary is plain text at 80 column
 
 from __future__ import annotations
 
-import io
 from typing import TYPE_CHECKING, TextIO
 
 from rich import box
-from rich.console import Console
+from rich.console import Console, Group
 from rich.padding import Padding
 from rich.progress import (
     BarColumn,
@@ -25,6 +24,7 @@ from rich.text import Text
 
 from medkit_replay.fleet.report import FILES, is_missing
 from medkit_replay.fleet.stats import codes_table, overview
+from medkit_replay.outputs.console import literal_console, plain_text
 from medkit_replay.text import printable
 
 if TYPE_CHECKING:
@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from pathlib import Path
     from types import TracebackType
     from typing import Self
+
+    from rich.console import RenderableType
 
     from medkit_replay.fleet.run import RunSummary
 
@@ -55,7 +57,7 @@ def _indented(text: Text) -> Padding:
     return Padding(text, (0, 0, 0, 2))
 
 
-def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> list[object]:
+def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> list[RenderableType]:
     """What the terminal summary shows, as rich renderables."""
     counts = overview(runs)
     head = Text()
@@ -67,7 +69,7 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
         f"; {_plural(counts['messages'], 'message')} read; "
         f"{counts['runs_with_confirmed']:,} with a confirmed fault"
     )
-    parts: list[object] = [head]
+    parts: list[RenderableType] = [head]
     verdicts = {k.removeprefix("budget_"): v for k, v in counts.items() if k.startswith("budget_")}
     if verdicts:
         line = Text("budget: ", style="bold")
@@ -152,36 +154,16 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
     return parts
 
 
-def _console(stream: TextIO, *, plain: bool) -> Console:
-    if plain:
-        return Console(
-            file=stream,
-            width=80,
-            force_terminal=False,
-            color_system=None,
-            no_color=True,
-            markup=False,
-            emoji=False,
-            highlight=False,
-        )
-    return Console(file=stream, markup=False, emoji=False, highlight=False)
-
-
 def render_summary(runs: Sequence[RunSummary], out_dir: Path | None = None) -> str:
     """The terminal summary as plain text at 80 columns (what a file or a pipe receives)."""
-    buffer = io.StringIO()
-    console = _console(buffer, plain=True)
-    for part in summary_renderables(runs, out_dir):
-        console.print(part)
-    return "\n".join(line.rstrip(" ") for line in buffer.getvalue().split("\n"))
+    return plain_text(Group(*summary_renderables(runs, out_dir)), 80)
 
 
 def print_summary(runs: Sequence[RunSummary], stream: TextIO, out_dir: Path | None = None) -> None:
     """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
-    console = _console(stream, plain=False)
+    console = literal_console(stream)
     if console.is_terminal:
-        for part in summary_renderables(runs, out_dir):
-            console.print(part)
+        console.print(Group(*summary_renderables(runs, out_dir)))
         return
     stream.write(render_summary(runs, out_dir))
 

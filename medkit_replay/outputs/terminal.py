@@ -87,18 +87,6 @@ def _plural(count: int, word: str) -> str:
     return f"{count} {word}" + ("" if count == 1 else "s")
 
 
-def _span(result: Result) -> tuple[int | None, int | None]:
-    """The recording's first and last log time: its inputs' spans, else the messages read."""
-    summary = result.summary
-    starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
-    ends = [i.end_ns for i in result.inputs if i.end_ns is not None]
-    if summary.start_ns is not None:
-        starts.append(summary.start_ns)
-    if summary.end_ns is not None:
-        ends.append(summary.end_ns)
-    return min(starts, default=None), max(ends, default=None)
-
-
 def _hms(ns: int) -> tuple[str, int, int, int, int]:
     """Sign, hours, minutes, seconds and milliseconds of a span (milliseconds truncated)."""
     sign = "-" if ns < 0 else ""
@@ -362,7 +350,7 @@ def _is_loud(warning: str) -> bool:
 
 def summary_renderable(result: Result, width: int = 80) -> Group:
     """The whole summary as one rich renderable, laid out for ``width`` columns."""
-    start_ns, end_ns = _span(result)
+    start_ns, end_ns = result.span()
     clock = _Clock(start_ns, (end_ns or start_ns) - start_ns) if start_ns is not None else None
     parts: list[RenderableType] = list(_header(result, clock, end_ns))
     off = any(correlation_disabled(w) for w in result.warnings)
