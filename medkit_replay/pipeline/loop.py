@@ -1,0 +1,63 @@
+"""The replay loop: every message in time order to its bridge or the gate, timers first.
+
+Records pile up as rows in the spools' tails and are settled every SETTLE_EVERY messages.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from medkit_replay.inputs import Message
+from medkit_replay.spool import Spool
+
+if TYPE_CHECKING:
+    from medkit_replay.engine.timeline import Timeline
+    from medkit_replay.inputs import Recording
+    from medkit_replay.pipeline.meter import Meter
+    from medkit_replay.pipeline.routing import Gate, Handler, Router
+
+SETTLE_EVERY = 1024
+"""Messages between two spills of the records the loop piled up (bounds memory)."""
+
+
+def replay_loop(
+    recording: Recording, meter: Meter | None, timeline: Timeline, router: Router, gate: Gate
+) -> int:
+    """Every message, in time order, to its bridge (field by field into the manager, which
+    records rows) or as request objects to the gate; timers run before each message's time."""
+    messages = 0
+    next_at = meter.next_at if meter is not None else 0  # 0: never reached
+    settle_at = SETTLE_EVERY
+    output = timeline.manager.output
+    logs = (output.reports, output.events, output.transitions)
+    spools = [log for log in logs if isinstance(log, Spool)]
+    report, apply = gate.report, gate.apply
+    handlers: dict[tuple[str, str, str], Handler | None] = {}
+    due = timeline.due_ns()
+    t_ns: int | None = None
+    for t_ns, input_index, topic, msgtype, role, msg in recording.message_tuples():
+        messages += 1
+        if messages == next_at and meter is not None:
+            meter.tick(messages, t_ns)
+            next_at = meter.next_at
+        if messages == settle_at:
+            settle_at += SETTLE_EVERY
+            for spool in spools:
+                spool.settle()
+        if t_ns >= due:
+            timeline.advance(t_ns)
+            due = timeline.due_ns()
+        key = (role, topic, msgtype)
+        try:
+            handler = handlers[key]
+        except KeyError:
+            handler = handlers[key] = router.handler(role, topic, msgtype)
+        if handler is not None:
+            handler(t_ns, topic, msg, report)
+        else:
+            message = Message(t_ns, input_index, topic, msgtype, role, msg)
+            for request in router.requests(message):
+                apply(request)
+    if t_ns is not None:
+        timeline.last_ns = t_ns  # what each advance(t) before the due time would have noted
+    return messages
