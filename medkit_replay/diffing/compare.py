@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, get_args
 
 from medkit_replay.diffing.align import align
 from medkit_replay.errors import InputError
@@ -35,20 +35,7 @@ Kind = Literal[
     "cluster_removed",
     "cluster_changed",
 ]
-KINDS: tuple[Kind, ...] = (
-    "fault_added",
-    "fault_removed",
-    "fault_changed",
-    "transition_shifted",
-    "transition_missing",
-    "transition_extra",
-    "event_shifted",
-    "event_missing",
-    "event_extra",
-    "cluster_added",
-    "cluster_removed",
-    "cluster_changed",
-)
+KINDS: tuple[Kind, ...] = get_args(Kind)
 FAULT_FIELDS = (
     "status",
     "severity",
