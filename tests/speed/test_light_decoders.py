@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from medkit_replay.inputs import cdr
+from medkit_replay.inputs import cdr, cdr_generator
 from medkit_replay.inputs.cdr import REFUSALS, DiagnosticArrayView, generate, generated_decoder
 from medkit_replay.inputs.typestore import PLAIN_CDR, DecodeError, make_decoder
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore
@@ -26,6 +26,8 @@ from tests.speed.support import plain
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+GENERATED = cdr_generator.__name__
+"""The module every generated record class says it comes from."""
 TS = base_typestore()
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
 LOG = "rcl_interfaces/msg/Log"
@@ -351,7 +353,7 @@ def test_a_big_endian_payload_goes_to_rosbags(message: object) -> None:
     decoder, _ = make_decoder(DIAGNOSTIC_ARRAY, NO_DEFINITION, pytest.fail)
     decoded = decoder.decode(raw)
     assert not isinstance(decoded, DiagnosticArrayView)  # routed by its header, to rosbags
-    assert not dataclasses.is_dataclass(decoded) or type(decoded).__module__ != cdr.__name__
+    assert not dataclasses.is_dataclass(decoded) or type(decoded).__module__ != GENERATED
     assert plain(decoded) == plain(TS.deserialize_cdr(raw, DIAGNOSTIC_ARRAY))
 
 
@@ -374,21 +376,21 @@ def test_a_definition_other_than_the_standard_gets_its_own_decoder() -> None:
     raw += b"\x03\x00\x00\x00ok\x00"
     message = decoder.decode(raw)
     assert not isinstance(message, DiagnosticArrayView)
-    assert type(message).__module__ == cdr.__name__  # a generated record, not rosbags' class
+    assert type(message).__module__ == GENERATED  # a generated record, not rosbags' class
     assert plain(message)["status"] == [  # type: ignore[index]
         {"level": ("int", 2), "name": ("str", "a"), "message": ("str", "ok")}
     ]
 
 
 def test_a_bug_in_generated_code_propagates(monkeypatch: pytest.MonkeyPatch) -> None:
-    original = cdr._Generator.prim
+    original = cdr_generator.Generator.prim
 
-    def forgetful(self: cdr._Generator, typ: str) -> str:
+    def forgetful(self: cdr_generator.Generator, typ: str) -> str:
         key = original(self, typ)
         del self.names[key]  # the generated code now calls a name its namespace lacks
         return key
 
-    monkeypatch.setattr(cdr._Generator, "prim", forgetful)
+    monkeypatch.setattr(cdr_generator.Generator, "prim", forgetful)
     monkeypatch.setattr(cdr, "_CACHE", {})
     decoder, _ = make_decoder(TIME, NO_DEFINITION, pytest.fail)
     raw = bytes(TS.serialize_cdr(new(TIME, sec=1, nanosec=2), TIME))
