@@ -8,9 +8,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from yaml import SafeLoader
 from yaml.error import MarkedYAMLError, YAMLError
 from yaml.nodes import MappingNode, Node, SequenceNode
 from yaml.reader import Reader, ReaderError
+
+from medkit_replay.errors import ConfigError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -175,3 +178,23 @@ def compose_bounded_at(reader: Reader, compose: Callable[[], Node | None]) -> No
         if err.line is not None:
             raise
         raise YamlBoundsError(err.message, reader.get_mark().line + 1) from None
+
+
+def compose_config(text: str, path: str) -> Node | None:
+    """The single YAML document of a config file (parameters, budget), composed by PyYAML's
+    safe loader within the bounds; None for an empty file.
+
+    Raises:
+        ConfigError: not YAML, or past the bounds, with ``path`` and the line.
+    """
+    try:
+        loader = SafeLoader(text)
+        try:
+            return compose_bounded_at(loader, loader.get_single_node)
+        finally:
+            loader.dispose()
+    except YamlBoundsError as err:
+        raise ConfigError(err.message, path=path, line=err.line) from None
+    except YAMLError as err:
+        problem, line = describe_yaml_error(err, text)
+        raise ConfigError(f"invalid YAML: {problem}", path=path, line=line) from None

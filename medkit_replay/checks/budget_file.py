@@ -38,9 +38,7 @@ from medkit_replay.checks.budget import (
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
 from medkit_replay.yaml_bounds import (
-    YamlBoundsError,
-    compose_bounded_at,
-    describe_yaml_error,
+    compose_config,
     shown_text,
 )
 
@@ -314,17 +312,7 @@ def parse_budget(text: str, path: str) -> Budget:
         ConfigError: invalid YAML, an unknown key, a wrong type or value (with file and line).
     """
     reader = _Reader(path)
-    try:
-        loader = yaml.SafeLoader(text)
-        try:
-            root = compose_bounded_at(loader, loader.get_single_node)
-        finally:
-            loader.dispose()
-    except YamlBoundsError as err:
-        raise ConfigError(err.message, path=path, line=err.line) from None
-    except yaml.YAMLError as err:
-        problem, line = describe_yaml_error(err, text)
-        raise ConfigError(f"invalid YAML: {problem}", path=path, line=line) from None
+    root = compose_config(text, path)
     if root is None:
         raise ConfigError("empty budget: expected 'version: 1' and a list of 'rules'", path=path)
     values = {k: (kn, v) for k, kn, v in reader.mapping(root, "budget", allowed=_TOP_KEYS)}

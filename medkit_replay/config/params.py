@@ -15,9 +15,7 @@ import yaml
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
 from medkit_replay.yaml_bounds import (
-    YamlBoundsError,
-    compose_bounded_at,
-    describe_yaml_error,
+    compose_config,
     shown_text,
 )
 
@@ -180,17 +178,7 @@ def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     except UnicodeDecodeError as err:
         at = data.count(b"\n", 0, err.start) + 1
         raise ConfigError(f"cannot read config file: {err}", path=str(path), line=at) from None
-    try:
-        loader = yaml.SafeLoader(text)
-        try:
-            root = compose_bounded_at(loader, loader.get_single_node)
-        finally:
-            loader.dispose()
-    except YamlBoundsError as err:
-        raise ConfigError(err.message, path=str(path), line=err.line) from None
-    except yaml.YAMLError as err:
-        problem, line = describe_yaml_error(err, text)
-        raise ConfigError(f"invalid YAML: {problem}", path=str(path), line=line) from None
+    root = compose_config(text, str(path))
     if root is None:
         return []
     if not isinstance(root, yaml.MappingNode):
