@@ -83,3 +83,8 @@ def draw(console: Console, renderable: RenderableType) -> None:
 def echo(text: str, stream: TextIO | None = None) -> None:
     """Write text to a stream (standard output by default)."""
     print(text, end="", file=stream or sys.stdout)
+
+
+def warn(message: str) -> None:
+    """A warning an output writer has about what it wrote, on standard error (one line)."""
+    sys.stderr.write(f"medkit-replay: warning: {message}\n")

@@ -20,7 +20,6 @@ tools and medkit-replay itself read it without any ROS package installed. Same r
 from __future__ import annotations
 
 import heapq
-import sys
 from functools import cache
 from importlib import resources
 from typing import IO, TYPE_CHECKING, BinaryIO, Protocol, cast
@@ -31,6 +30,7 @@ from rosbags.typesys import Stores, get_typestore
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.msgdefs import MEDKIT_PACKAGE, Definition, types_from_definition
 from medkit_replay.outputs.atomic import atomic_binary
+from medkit_replay.outputs.console import warn as warn_stderr
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -256,12 +256,8 @@ def write_mcap_stream(result: Result, stream: BinaryIO | IO[bytes]) -> dict[str,
     return counts
 
 
-def _warn(message: str) -> None:
-    sys.stderr.write(f"medkit-replay: warning: {message}\n")
-
-
 def write_mcap(
-    result: Result, path: Path, *, warn: Callable[[str], None] = _warn
+    result: Result, path: Path, *, warn: Callable[[str], None] = warn_stderr
 ) -> dict[str, int]:
     """Write the replayed FaultEvents and status changes to an MCAP file at ``path``, through a
     temporary file renamed into place (whole or not at all).

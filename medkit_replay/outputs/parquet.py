@@ -7,11 +7,11 @@ is a one-line error, exit 2. Every table keeps a fixed Arrow schema, even when i
 from __future__ import annotations
 
 import importlib
-import sys
 from typing import TYPE_CHECKING, Any
 
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.atomic import atomic_binary
+from medkit_replay.outputs.console import warn as warn_stderr
 from medkit_replay.outputs.tables import TABLE_COLUMNS, encodable, result_tables
 
 if TYPE_CHECKING:
@@ -105,12 +105,8 @@ def clamped(frame: pd.DataFrame) -> tuple[pd.DataFrame, int]:
     return frame, count
 
 
-def _warn(message: str) -> None:
-    sys.stderr.write(f"medkit-replay: warning: {message}\n")
-
-
 def write_parquet(
-    result: Result, directory: Path, *, warn: Callable[[str], None] = _warn
+    result: Result, directory: Path, *, warn: Callable[[str], None] = warn_stderr
 ) -> list[Path]:
     """Write ``<table>.parquet`` for every report table into ``directory``.
 
