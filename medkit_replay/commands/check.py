@@ -25,7 +25,6 @@ from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
-from medkit_replay.fleet.run import check_configs
 from medkit_replay.outputs.atomic import refuse_overlap
 from medkit_replay.outputs.progress import progress_bar
 from medkit_replay.pipeline import replay
@@ -85,7 +84,7 @@ def check(
       medkit-replay check runs/*.mcap --budget budget.yaml --junit budget.xml --github
     """
     budget = load_budget(budget_path)  # a bad budget fails before any replay
-    check_configs(configs)  # so does a bad config
+    protected = config_files(configs)  # so does a bad config
     for path in inputs:
         if not os.path.lexists(path):
             raise InputError("input not found", path=str(path))
@@ -93,7 +92,7 @@ def check(
     outputs = [("--junit", junit_out)] if junit_out is not None else []
     if summary_path:
         outputs.append((f"${SUMMARY_ENV}", Path(summary_path)))
-    refuse_overlap([*inputs, *config_files(configs), budget_path], outputs)
+    refuse_overlap([*inputs, *protected, budget_path], outputs)
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
     for group in groups:

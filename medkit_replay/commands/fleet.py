@@ -21,7 +21,6 @@ from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.fleet.cluster import dask_client_type, run_on_dask
 from medkit_replay.fleet.discover import discover
-from medkit_replay.fleet.run import check_configs
 from medkit_replay.fleet.workers import run_all
 from medkit_replay.outputs.atomic import refuse_overlap
 
@@ -103,7 +102,7 @@ def fleet(
         raise click.UsageError("--jobs and --dask cannot be used together")
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
-    check_configs(configs)
+    config_paths = config_files(configs)  # a bad config stops the fleet before it starts
     parsed_budget = None
     if budget is not None:
         from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
@@ -116,7 +115,7 @@ def fleet(
     )
     from medkit_replay.fleet.terminal import fleet_progress, print_summary  # noqa: PLC0415
 
-    protected = [*input_dirs, *config_files(configs), *([budget] if budget is not None else [])]
+    protected = [*input_dirs, *config_paths, *([budget] if budget is not None else [])]
     refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])
     recordings = discover(input_dirs)
     if not recordings:

@@ -8,7 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.replay_options import replay_options
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
@@ -17,14 +19,22 @@ if TYPE_CHECKING:
 FILE_PARAMETERS = ("correlation.config_file", "entity_thresholds.config_file")
 
 
-def config_files(configs: Iterable[Path]) -> list[Path]:
+def config_files(configs: Iterable[str | Path], *, check: bool = True) -> list[Path]:
     """``configs`` and every file their fault_manager parameters name, in that order.
 
+    With ``check``, the configs are also read as every replay will read them, so that a bad one
+    stops a command before it starts (once, with its file and line).
+
     Raises:
-        ConfigError: a config file is missing or unparsable.
+        ConfigError: a config file is missing, unparsable, or (with ``check``) holds a value
+            upstream refuses.
     """
     paths = [Path(c) for c in configs]
-    named = load_parameters(paths).node("fault_manager")
+    params = load_parameters(paths)
+    if check:
+        fault_manager_config(params.node("fault_manager"))
+        replay_options(params)
+    named = params.node("fault_manager")
     found = list(paths)
     for name in FILE_PARAMETERS:
         param = named.get(name)

@@ -12,9 +12,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from medkit_replay.config.fault_manager import fault_manager_config
-from medkit_replay.config.params import load_parameters
-from medkit_replay.config.replay_options import replay_options
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
 from medkit_replay.inputs.recording import input_kind
@@ -215,18 +212,6 @@ def summary_problem(summary: RunSummary) -> str | None:
         if count is not None and not _int64(count):
             return f"{name} count {_shown(count)} is out of range"
     return None
-
-
-def check_configs(configs: Sequence[str | Path]) -> None:
-    """Load the configs as every run will, so that a bad one stops the fleet before it starts
-    (once, with its file and line) instead of failing every run.
-
-    Raises:
-        ConfigError: a config file is missing, invalid, or holds a value upstream refuses.
-    """
-    params = load_parameters(Path(c) for c in configs)
-    fault_manager_config(params.node("fault_manager"))
-    replay_options(params)
 
 
 def failed_run(path: Path, error: BaseException | str) -> RunSummary:

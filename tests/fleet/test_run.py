@@ -8,9 +8,10 @@ from pathlib import Path
 import pytest
 
 from medkit_replay.checks import parse_budget
+from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import ConfigError
 from medkit_replay.fleet import run as fleet_run
-from medkit_replay.fleet.run import RunSummary, check_configs, run_one, summarize
+from medkit_replay.fleet.run import RunSummary, run_one, summarize
 from medkit_replay.fleet.workers import default_jobs, run_all
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
@@ -145,13 +146,13 @@ def test_run_all_with_more_jobs_than_recordings(tmp_path: Path) -> None:
 
 
 def test_check_configs_refuses_a_bad_config_once(tmp_path: Path) -> None:
-    check_configs([NAV2, BRINGUP])
+    config_files([NAV2, BRINGUP])
     with pytest.raises(ConfigError, match="not found"):
-        check_configs([tmp_path / "missing.yaml"])
+        config_files([tmp_path / "missing.yaml"])
     bad = tmp_path / "bad.yaml"
     bad.write_text("fault_manager:\n  ros__parameters:\n    auto_confirm_after_sec: 10\n")
     with pytest.raises(ConfigError, match="auto_confirm_after_sec"):
-        check_configs([bad])
+        config_files([bad])
 
 
 def test_default_jobs_is_at_least_one() -> None:
