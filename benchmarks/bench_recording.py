@@ -542,7 +542,7 @@ def _mission_camera(seed: int) -> Iterator[Event]:
     """JPEG-sized incompressible frames at 15 Hz: 5 GB over the hour."""
     store = base_typestore()
     rng = np.random.default_rng(seed)
-    size = MISSION_CAMERA_BYTES // (MISSION_CAMERA_HZ * MISSION_S)
+    size = MISSION_CAMERA_BYTES // (MISSION_CAMERA_HZ * 3600)
     frames = [rng.integers(0, 256, size, dtype=np.uint8) for _ in range(4)]
     period = 10**9 // MISSION_CAMERA_HZ
     k = 0
@@ -595,8 +595,8 @@ def _mission_diagnostics(seed: int) -> Iterator[Event]:
         k += 1
 
 
-def generate_mission(path: Path, seed: int) -> None:
-    """Write the one-hour mission (rosbag2 directory, MCAP storage, uncompressed), streaming."""
+def generate_mission(path: Path, seed: int, mission_s: int = MISSION_S) -> None:
+    """Write the mission, one hour unless told (rosbag2 folder, MCAP, uncompressed), streaming."""
     store = base_typestore()
     streams = [
         _mission_camera(seed),
@@ -610,7 +610,7 @@ def generate_mission(path: Path, seed: int) -> None:
         ROSOUT_TOPIC: Log.__msgtype__,
         **{p.name + ACTION_SUFFIX: GoalStatusArray.__msgtype__ for p in MISSION_ACTIONS},
     }
-    end_ns = T0_NS + MISSION_S * 10**9
+    end_ns = T0_NS + mission_s * 10**9
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         connections = {
             topic: writer.add_connection(topic, msgtype, typestore=store)
@@ -622,19 +622,22 @@ def generate_mission(path: Path, seed: int) -> None:
             writer.write(connections[topic], t_ns, payload)
 
 
-def mission_recording(root: Path, seed: int) -> Path:
-    """The one-hour mission under ``root``: reused if complete, else written."""
-    path, marker = root / f"mission_hour_seed{seed}", root / f"mission_hour_seed{seed}.json"
-    stamp = {"generator": GENERATOR_VERSION, "mission_s": MISSION_S, "seed": seed}
+def mission_recording(root: Path, seed: int, mission_s: int = MISSION_S) -> Path:
+    """The mission (one hour unless told) under ``root``: reused if complete, else written."""
+    name = (
+        f"mission_hour_seed{seed}" if mission_s == MISSION_S else f"mission_{mission_s}s_seed{seed}"
+    )
+    path, marker = root / name, root / f"{name}.json"
+    stamp = {"generator": GENERATOR_VERSION, "mission_s": mission_s, "seed": seed}
     if path.is_dir() and marker.is_file() and json.loads(marker.read_text()) == stamp:
         print(f"reusing {path} ({disk_size(path) / 1e9:.2f} GB)")
         return path
     marker.unlink(missing_ok=True)
     if path.exists():
         shutil.rmtree(path)
-    print(f"generating {path} (one hour, seed {seed}) ...", flush=True)
+    print(f"generating {path} ({mission_s} s, seed {seed}) ...", flush=True)
     start = time.perf_counter()
-    generate_mission(path, seed)
+    generate_mission(path, seed, mission_s)
     marker.write_text(json.dumps(stamp))
     elapsed = time.perf_counter() - start
     size = disk_size(path)
