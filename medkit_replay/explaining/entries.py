@@ -31,6 +31,8 @@ EntryKind = Literal[
 ]
 """What a story entry tells; ``repeat`` stands for reports in a row that did the same."""
 JSON = str | int | bool | None | list["JSON"] | dict[str, "JSON"]
+MAX_REMEMBERED = 4096
+"""Distinct recorded messages remembered, to say "the same as at" instead of repeating them."""
 
 CAUSES = {
     "report": "by this report",
@@ -164,7 +166,9 @@ class EntryBuilder:
         self.entries: list[Entry] = []
         self.last_clear: TracedClear | None = None
         self.previous: tuple[str | None, int | None] = (None, None)  # status, counter
-        self.shown: RecordedMessage | None = None  # the last recorded message shown
+        self.shown: object = None  # the content of the last recorded message shown
+        self.seen: dict[object, int] = {}  # recorded message content -> first shown at
+        self.t_ns = 0  # the time of the item being told
 
     def message_lines(self, message: RecordedMessage | None, description: str) -> list[Line]:
         """The request's description and recorded message, unless the same as last shown."""
@@ -176,14 +180,19 @@ class EntryBuilder:
             lines.append((part("description ", "dim"), part(repr(description), "text")))
         if message is None:
             return lines
-        same = self.shown is not None and (
-            (self.shown.type, self.shown.topic, self.shown.fields, self.shown.items)
-            == (message.type, message.topic, message.fields, message.items)
-        )
-        self.shown = message
-        if same:
-            return lines
-        return lines + _message_lines(message, self.inputs)
+        content = (message.type, message.topic, message.fields, message.items)
+        first_ns = self.seen.get(content)
+        if first_ns is not None:  # shown before: once in a row is enough, else say when
+            if content != self.shown:
+                lines.append(
+                    (part(f"recorded: the same as at {when(first_ns, self.origin_ns)}", "dim"),)
+                )
+        else:
+            if len(self.seen) < MAX_REMEMBERED:
+                self.seen[content] = self.t_ns
+            lines += _message_lines(message, self.inputs)
+        self.shown = content
+        return lines
 
     def add(
         self, t_ns: int, kind: EntryKind, line: Line, details: list[Line], fields: dict[str, JSON]

@@ -259,6 +259,7 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
     for item in _ordered(trace.items, trace.fault_code):
         if at_ns is not None and item_time(item) > at_ns:
             break
+        builder.t_ns = item_time(item)
         ENTRY_BUILDERS[type(item)](builder, item)
     entries = _condense(builder.entries, origin_ns, trace.fault_code)
     state, state_fields = state_lines(trace.state_at, origin_ns, trace.fault_code)
