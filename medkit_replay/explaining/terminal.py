@@ -86,10 +86,8 @@ def story_renderable(story: Story) -> Group:
     """The whole story as one rich renderable."""
     head = Text()
     head.append(printable(clip(story.fault_code, MAX_PART)), style="bold")
-    head.append(
-        f": its story in bag time (s from the start, {start_text(story.origin_ns)}; "
-        "clock times UTC)"
-    )
+    clock = "; clock times UTC" if story.origin_ns >= EPOCH_FLOOR_NS else ""
+    head.append(f": its story in bag time (s from the start, {start_text(story.origin_ns)}{clock})")
     parts: list[RenderableType] = [head]
     for path in story.inputs:
         parts.append(Text(f"  {printable(clip(path, MAX_PART))}", style="dim"))
