@@ -128,3 +128,19 @@ def test_the_command_on_the_sample(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(argv) == 0
     out, err = capsys.readouterr()
     assert err == "" and "state at 80.000 s: CONFIRMED" in out
+
+
+def test_the_readme_shows_real_output(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("COLUMNS", raising=False)
+    monkeypatch.chdir(ROOT)
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Explaining one fault", 1)[1]
+    example = section.split("```\nmedkit-replay explain sample_bags", 1)[1]
+    command, shown = ("sample_bags" + example).split("```\n\n```\n", 1)
+    shown = shown.split("\n```", 1)[0] + "\n"
+    args = command.strip().split()
+    assert main(["explain", *args, "--quiet"]) == 0
+    out, _ = capsys.readouterr()
+    assert out == shown
