@@ -4,7 +4,7 @@
 draws it, ``records`` writes it as JSON; ``nearest_codes`` helps when a code never appeared.
 """
 
-from medkit_replay.explaining.entries import Entry
+from medkit_replay.explaining.lines import Entry
 from medkit_replay.explaining.nearest import known_codes, nearest_codes
 from medkit_replay.explaining.records import EXPLAIN_SCHEMA, story_record, write_story_json
 from medkit_replay.explaining.story import Story, build_story

@@ -5,10 +5,15 @@ Reads the records the replay made; every verdict shown is the engine's, none is 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
-from medkit_replay.explaining.lines import Line, join, part, plain
+from medkit_replay.explaining.lines import JSON, Entry, EntryKind, Line, part, plain
+from medkit_replay.explaining.recorded import (
+    message_fields,
+    message_lines,
+    rule_fields,
+    rule_text,
+)
 from medkit_replay.text import seconds, severity_name
 from medkit_replay.trace import (
     CorrelationDecision,
@@ -24,13 +29,8 @@ if TYPE_CHECKING:
 
     from medkit_replay.model import NearMiss
     from medkit_replay.result import Result
-    from medkit_replay.trace import FaultTrace, RecordedMessage, RuleFacts, TraceItem
+    from medkit_replay.trace import FaultTrace, RecordedMessage, TraceItem
 
-EntryKind = Literal[
-    "report", "repeat", "held", "correlation", "transition", "event", "event_withheld", "clear"
-]
-"""What a story entry tells; ``repeat`` stands for reports in a row that did the same."""
-JSON = str | int | bool | None | list["JSON"] | dict[str, "JSON"]
 MAX_REMEMBERED = 4096
 """Distinct recorded messages remembered, to say "the same as at" instead of repeating them."""
 
@@ -43,25 +43,6 @@ CAUSES = {
     "clear": "by a ClearFault",
     "auto_clear": "auto-cleared with its root cause",
 }
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class Entry:
-    """One step of the story.
-
-    Attributes:
-        t_ns: bag time (absolute ns) it happened at.
-        kind: what it tells (:data:`EntryKind`).
-        line: its sentence, in styled parts.
-        details: further lines (the recorded message, a near miss...).
-        fields: the same facts as JSON values (``--json``).
-    """
-
-    t_ns: int
-    kind: EntryKind
-    line: Line
-    details: tuple[Line, ...] = ()
-    fields: dict[str, JSON] = field(default_factory=dict)
 
 
 def when(ns: int, origin_ns: int) -> str:
@@ -79,76 +60,6 @@ def _band(conf: int | None, heal: int | None, healing: bool, prefix: str | None)
     if prefix is not None:
         text += f"; per-entity thresholds of {prefix}"
     return text
-
-
-def _value(value: str | int | tuple[int, str]) -> str:
-    """A recorded field for a line: text quoted (it is the recording's), numbers as they are."""
-    if isinstance(value, tuple):
-        return f"{value[0]} ({value[1]})"
-    return repr(value) if isinstance(value, str) else str(value)
-
-
-def _message_lines(message: RecordedMessage | None, inputs: tuple[str, ...]) -> list[Line]:
-    if message is None:
-        return []
-    where = f" in {inputs[message.input_index]}" if len(inputs) > 1 else ""
-    head = [part("recorded ", "dim"), part(message.type, "dim")]
-    if message.topic:
-        head += [part(" on ", "dim"), part(message.topic, "topic")]
-    head.append(part(where, "dim"))
-    lines: list[Line] = [tuple(head)]
-    if message.fields:
-        pieces: list[Line] = [
-            (part(f"{name} ", "dim"), part(_value(v), "text")) for name, v in message.fields
-        ]
-        lines.append(join(pieces, ", "))
-    if message.items:
-        pieces = [
-            (part(key, "text"), part("=", "dim"), part(value, "text"))
-            for key, value in message.items
-        ]
-        if message.items_left_out:
-            pieces.append((part(f"+{message.items_left_out} more", "dim"),))
-        lines.append(join(pieces, ", "))
-    return lines
-
-
-def _message_fields(message: RecordedMessage | None) -> JSON:
-    if message is None:
-        return None
-    return {
-        "input_index": message.input_index,
-        "topic": message.topic,
-        "type": message.type,
-        "fields": {
-            name: ({"value": v[0], "name": v[1]} if isinstance(v, tuple) else v)
-            for name, v in message.fields
-        },
-        "items": [[key, value] for key, value in message.items],
-        "items_left_out": message.items_left_out,
-    }
-
-
-def _rule_text(rule: RuleFacts | None) -> str:
-    if rule is None:
-        return "an unknown rule"
-    return f"rule {rule.rule_id} ({rule.mode}, window {rule.window_ms} ms)"
-
-
-def _rule_fields(rule: RuleFacts | None) -> JSON:
-    if rule is None:
-        return None
-    return {
-        "rule_id": rule.rule_id,
-        "name": rule.name,
-        "mode": rule.mode,
-        "window_ms": rule.window_ms,
-        "mute_symptoms": rule.mute_symptoms,
-        "auto_clear_with_root": rule.auto_clear_with_root,
-        "min_count": rule.min_count,
-        "show_as_single": rule.show_as_single,
-        "representative": rule.representative,
-    }
 
 
 class EntryBuilder:
@@ -170,7 +81,7 @@ class EntryBuilder:
         self.seen: dict[object, int] = {}  # recorded message content -> first shown at
         self.t_ns = 0  # the time of the item being told
 
-    def message_lines(self, message: RecordedMessage | None, description: str) -> list[Line]:
+    def recorded_lines(self, message: RecordedMessage | None, description: str) -> list[Line]:
         """The request's description and recorded message, unless the same as last shown."""
         lines: list[Line] = []
         recorded = (
@@ -190,7 +101,7 @@ class EntryBuilder:
         else:
             if len(self.seen) < MAX_REMEMBERED:
                 self.seen[content] = self.t_ns
-            lines += _message_lines(message, self.inputs)
+            lines += message_lines(message, self.inputs)
         self.shown = content
         return lines
 
@@ -240,7 +151,7 @@ class EntryBuilder:
             "healing_enabled": item.healing_enabled,
             "entity_prefix": item.entity_prefix,
             "near_miss_margin": None,
-            "message": _message_fields(item.message),
+            "message": message_fields(item.message),
         }
         if not r.accepted:
             line += [part(": rejected", "reject"), part(f" ({r.reject_reason})", "text")]
@@ -263,7 +174,7 @@ class EntryBuilder:
                 part("), ", "dim"),
                 part(r.status, f"status:{r.status}"),
             ]
-        details += self.message_lines(item.message, r.description)
+        details += self.recorded_lines(item.message, r.description)
         near = self.near.get(r.t_ns) if r.accepted and r.event_type == "FAILED" else None
         if (
             near is not None
@@ -326,9 +237,9 @@ class EntryBuilder:
             "source_id": item.source_id,
             "stage": item.stage,
             "reason": item.reason,
-            "message": _message_fields(item.message),
+            "message": message_fields(item.message),
         }
-        details = self.message_lines(item.message, item.description)
+        details = self.recorded_lines(item.message, item.description)
         self.add(item.t_ns, "held", line, details, fields)
 
     def decision(self, item: TraceItem) -> None:
@@ -342,7 +253,7 @@ class EntryBuilder:
             "delay_ms": item.delay_ms,
             "cluster_id": item.cluster_id or None,
             "retroactive_mute_codes": list(item.retroactive_mute_codes),
-            "rule": _rule_fields(rule),
+            "rule": rule_fields(rule),
         }
         line: list[tuple[str, str]] = [part("correlation ", "kind")]
         if item.fault_code != self.code and self.code in item.retroactive_mute_codes:
@@ -357,13 +268,13 @@ class EntryBuilder:
             line += [
                 part("root of ", "plain"),
                 part(item.fault_code, "code"),
-                part(f" under {_rule_text(rule)}, {item.delay_ms} ms after this fault: ", "dim"),
+                part(f" under {rule_text(rule)}, {item.delay_ms} ms after this fault: ", "dim"),
                 part("muted" if item.should_mute else "not muted", "muted"),
             ]
         elif item.is_root_cause:
             line += [
                 part("root cause", "plain"),
-                part(f" under {_rule_text(rule)}: its symptoms in the window are", "dim"),
+                part(f" under {rule_text(rule)}: its symptoms in the window are", "dim"),
                 part(
                     " muted" if rule is not None and rule.mute_symptoms else " not muted", "muted"
                 ),
@@ -372,7 +283,7 @@ class EntryBuilder:
             line += [
                 part("symptom of ", "plain"),
                 part(item.root_cause_code, "code"),
-                part(f" under {_rule_text(rule)}, {item.delay_ms} ms after the root: ", "dim"),
+                part(f" under {rule_text(rule)}, {item.delay_ms} ms after the root: ", "dim"),
                 part("muted" if item.should_mute else "not muted (mute_symptoms off)", "muted"),
             ]
         elif item.cluster_id:
@@ -380,7 +291,7 @@ class EntryBuilder:
             if rule is not None:
                 line.append(
                     part(
-                        f" joined under {_rule_text(rule)}, min_count {rule.min_count}, "
+                        f" joined under {rule_text(rule)}, min_count {rule.min_count}, "
                         f"representative {rule.representative}",
                         "dim",
                     )

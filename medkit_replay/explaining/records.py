@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, TextIO
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
-    from medkit_replay.explaining.entries import JSON
+    from medkit_replay.explaining.lines import JSON
     from medkit_replay.explaining.story import Story
 
 EXPLAIN_SCHEMA = "medkit-replay/explain/v1"

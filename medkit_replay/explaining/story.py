@@ -8,13 +8,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from medkit_replay.explaining.entries import ENTRY_BUILDERS, Entry, EntryBuilder, when
-from medkit_replay.explaining.lines import Line, part
+from medkit_replay.explaining.entries import ENTRY_BUILDERS, EntryBuilder, when
+from medkit_replay.explaining.lines import Entry, Line, part
 from medkit_replay.text import severity_name
 from medkit_replay.trace import CorrelationDecision, HeldRequest, TracedReport, TracedTransition
 
 if TYPE_CHECKING:
-    from medkit_replay.explaining.entries import JSON
+    from medkit_replay.explaining.lines import JSON
     from medkit_replay.result import Result
     from medkit_replay.trace import FaultTrace, StateAt, TraceItem
 
