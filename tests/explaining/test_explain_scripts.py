@@ -276,3 +276,10 @@ def test_tracing_changes_no_report_byte(tmp_path: Path) -> None:
     plain = dumps(replay([script], [config]))
     traced = dumps(replay([script], [config], trace=FaultTrace(fault_code="WHEEL_SLIP")))
     assert plain == traced
+
+
+@pytest.mark.parametrize("at", ["nan", "inf", "soon"])
+def test_at_must_be_a_time(tmp_path: Path, capsys: pytest.CaptureFixture[str], at: str) -> None:
+    script = write_script(tmp_path, [failed(1, "MOTOR_OVERHEAT")])
+    status, out, err = run(["explain", str(script), "MOTOR_OVERHEAT", "--at", at], capsys)
+    assert status == 2 and out == "" and err.count("\n") == 1 and "--at" in err
