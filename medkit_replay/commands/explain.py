@@ -87,7 +87,7 @@ def explain(
         nearest = nearest_codes(code, known_codes(result))
         shown = ", ".join(printable(clip(c, MAX_CODE_SHOWN)) for c in nearest)
         raise UnknownCodeError(
-            f"fault code {printable(clip(code, MAX_CODE_SHOWN))!r} never appears in the "
+            f"fault code '{printable(clip(code, MAX_CODE_SHOWN))}' never appears in the "
             "recording; "
             + (f"nearest codes: {shown}" if nearest else "no fault code appears at all")
         )

@@ -34,7 +34,7 @@ def story_record(story: Story) -> dict[str, JSON]:
         "at_offset_ns": story.at_ns - story.origin_ns if story.at_ns is not None else None,
         "summary": story.summary,
         "entries": [entry.fields for entry in story.entries],
-        "state": story.state_fields["state"],
+        "state": story.state_fields,
     }
 
 

@@ -32,7 +32,7 @@ class Story:
     summary: dict[str, JSON]
     entries: tuple[Entry, ...]
     state: tuple[Line, ...]
-    state_fields: dict[str, JSON]
+    state_fields: JSON
 
 
 def _ordered(items: list[TraceItem], code: str) -> list[TraceItem]:
@@ -274,7 +274,7 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
         summary=summary,
         entries=tuple(entries),
         state=tuple(state),
-        state_fields={"state": state_fields},
+        state_fields=state_fields,
     )
 
 
