@@ -42,7 +42,7 @@ class WithheldSink(Protocol):
     """A ReportSink that also takes the requests a bridge held back, and why (``explain``).
 
     Plain sinks have no ``withheld``: a bridge tells it only to a sink that has one
-    (:func:`tell_withheld`).
+    (:func:`withheld_listener`).
     """
 
     def withheld(
@@ -62,25 +62,10 @@ class WithheldSink(Protocol):
         """Note one request that did not reach the manager (``stage``: what held it)."""
 
 
-def tell_withheld(
-    sink: ReportSink,
-    t_ns: int,
-    origin: Origin,
-    topic: str | None,
-    fault_code: str,
-    event_type: int,
-    severity: int,
-    description: str,
-    source_id: str,
-    stage: str,
-    reason: str,
-) -> None:
-    """Tell a held-back request to ``sink`` when it listens for them (most sinks do not)."""
-    if getattr(sink, "withheld", None) is not None:
-        cast("WithheldSink", sink).withheld(
-            t_ns, origin, topic, fault_code, event_type, severity, description, source_id,
-            stage, reason,
-        )  # fmt: skip
+def withheld_listener(sink: ReportSink) -> WithheldSink | None:
+    """``sink`` when it listens for held-back requests (most do not: then there is nothing to
+    tell, and nothing to word)."""
+    return cast("WithheldSink", sink) if getattr(sink, "withheld", None) is not None else None
 
 
 class Bridge(Protocol):
@@ -206,6 +191,9 @@ class FaultReporter:
         severity: int,
         description: str,
     ) -> None:
+        listener = withheld_listener(sink)
+        if listener is None:
+            return
         config = self.local_filter.config
         passed = event_type == _PASSED
         seen = self.local_filter.tracked(fault_code, passed=passed)
@@ -214,8 +202,8 @@ class FaultReporter:
             f"{config.default_threshold} {'PASSED' if passed else 'FAILED'} report(s) within "
             f"{config.default_window_sec:g} s"
         )
-        tell_withheld(
-            sink, t_ns, self.origin, topic, fault_code, event_type, severity, description,
+        listener.withheld(
+            t_ns, self.origin, topic, fault_code, event_type, severity, description,
             self.source_id, "local_filter", reason,
         )  # fmt: skip
 
