@@ -283,3 +283,26 @@ def test_at_must_be_a_time(tmp_path: Path, capsys: pytest.CaptureFixture[str], a
     script = write_script(tmp_path, [failed(1, "MOTOR_OVERHEAT")])
     status, out, err = run(["explain", str(script), "MOTOR_OVERHEAT", "--at", at], capsys)
     assert status == 2 and out == "" and err.count("\n") == 1 and "--at" in err
+
+
+def test_a_clear_of_the_fault_itself(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    lines = [failed(1, "MOTOR_OVERHEAT", severity=3), clear(2, "MOTOR_OVERHEAT")]
+    lines += [clear(3, "MOTOR_OVERHEAT"), failed(4, "MOTOR_OVERHEAT")]
+    story = story_json(tmp_path, lines, "MOTOR_OVERHEAT", capsys)
+    assert [(c["t_ns"], c["success"], c["message"]) for c in entries(story, "clear")] == [
+        (2 * S, True, "Fault cleared: MOTOR_OVERHEAT"),
+        (3 * S, True, "Fault cleared: MOTOR_OVERHEAT"),
+    ]
+    assert [
+        (t["from_status"], t["to_status"], t["cause"]) for t in entries(story, "transition")
+    ] == [
+        (None, "CONFIRMED", "report"),
+        ("CONFIRMED", "CLEARED", "clear"),
+        ("CLEARED", "PREFAILED", "report"),  # reactivated: the counter starts again
+    ]
+    cleared = [e for e in entries(story, "event") if e["event_type"] == "fault_cleared"]
+    assert [e["t_ns"] for e in cleared] == [2 * S, 3 * S]
+    listed = story["entries"]
+    assert isinstance(listed, list)
+    kinds = [e["kind"] for e in listed if e["t_ns"] == 2 * S]
+    assert kinds == ["clear", "transition", "event"]
