@@ -13,6 +13,7 @@ import click
 from medkit_replay.commands.analyze import analyze
 from medkit_replay.commands.check import check
 from medkit_replay.commands.diff import diff
+from medkit_replay.commands.explain import explain
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.errors import MedkitReplayError, Terminated
@@ -73,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
 cli.add_command(analyze)
 cli.add_command(check)
 cli.add_command(diff)
+cli.add_command(explain)
 cli.add_command(fleet)
 
 

@@ -79,13 +79,17 @@ ALLOWED: dict[str, set[str]] = {
     "yaml_bounds": {"errors", "text"},
     "spool": {"errors"},
     "result": {"model"},
+    "trace": {"model"},
     "engine": {"model", "wildcards"},
-    "bridges": {"model", "engine"},
+    "bridges": {"model", "engine", "trace"},
     "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs"},
     # config reads parameters into the settings types of the layers it configures.
     "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges"},
     "parity": {"model", "bridges", "config"},
-    "pipeline": NEUTRAL | {"spool", "result", "parity", "engine", "bridges", "inputs", "config"},
+    "pipeline": NEUTRAL
+    | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace"},
+    # explaining reads a Result and the FaultTrace the replay filled; it draws through outputs.
+    "explaining": NEUTRAL | {"result", "trace", "outputs"},
     "outputs": NEUTRAL | {"result", "files", "msgdefs"},
     "msgdefs": NEUTRAL,
     "checks": NEUTRAL | {"result", "files", "yaml_bounds", "outputs"},
@@ -94,7 +98,19 @@ ALLOWED: dict[str, set[str]] = {
     "fleet": NEUTRAL | {"result", "files", "inputs", "config", "pipeline", "checks", "outputs"},
     "pytest_plugin": NEUTRAL | {"result", "pipeline", "checks", "diffing", "outputs"},
     "commands": NEUTRAL
-    | {"result", "files", "inputs", "config", "pipeline", "checks", "diffing", "fleet", "outputs"},
+    | {
+        "result",
+        "files",
+        "inputs",
+        "config",
+        "pipeline",
+        "checks",
+        "diffing",
+        "fleet",
+        "outputs",
+        "explaining",
+        "trace",
+    },
     "cli": {"commands", "errors", "outputs", "version"},
     "__init__": {"errors", "version", "pipeline", "result", "outputs"},
 }

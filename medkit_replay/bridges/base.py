@@ -6,7 +6,7 @@ The reporter mirrors ros2_medkit_fault_reporter (bridges.md §0): empty codes dr
 from __future__ import annotations
 
 from collections import OrderedDict
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.engine.local_filter import LocalFilter, LocalFilterConfig
 from medkit_replay.model import EventType, ReportRequest
@@ -36,6 +36,36 @@ class ReportSink(Protocol):
         /,
     ) -> object:
         """Handle the request (what it returns is not used)."""
+
+
+class WithheldSink(Protocol):
+    """A ReportSink that also takes the requests a bridge held back, and why (``explain``).
+
+    Plain sinks have no ``withheld``: a bridge tells it only to a sink that has one
+    (:func:`withheld_listener`).
+    """
+
+    def withheld(
+        self,
+        t_ns: int,
+        origin: Origin,
+        topic: str | None,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+        source_id: str,
+        stage: str,
+        reason: str,
+        /,
+    ) -> None:
+        """Note one request that did not reach the manager (``stage``: what held it)."""
+
+
+def withheld_listener(sink: ReportSink) -> WithheldSink | None:
+    """``sink`` when it listens for held-back requests (most do not: then there is nothing to
+    tell, and nothing to word)."""
+    return cast("WithheldSink", sink) if getattr(sink, "withheld", None) is not None else None
 
 
 class Bridge(Protocol):
@@ -132,16 +162,50 @@ class FaultReporter:
         sink: ReportSink,
     ) -> None:
         """Send a FAILED request unless the code is empty or the local filter holds it."""
-        if fault_code and self.local_filter.should_forward(fault_code, severity, t_ns):
+        if not fault_code:
+            return
+        if self.local_filter.should_forward(fault_code, severity, t_ns):
             sink(
                 t_ns, self.origin, topic, fault_code, _FAILED, severity, description,
                 self.source_id,
             )  # fmt: skip
+        else:
+            self._held(sink, t_ns, topic, fault_code, _FAILED, severity, description)
 
     def report_passed(self, t_ns: int, topic: str, fault_code: str, sink: ReportSink) -> None:
         """Send a PASSED request (severity 0, no description) unless held back."""
-        if fault_code and self.local_filter.should_forward_passed(fault_code, t_ns):
+        if not fault_code:
+            return
+        if self.local_filter.should_forward_passed(fault_code, t_ns):
             sink(t_ns, self.origin, topic, fault_code, _PASSED, 0, "", self.source_id)
+        else:
+            self._held(sink, t_ns, topic, fault_code, _PASSED, 0, "")
+
+    def _held(
+        self,
+        sink: ReportSink,
+        t_ns: int,
+        topic: str,
+        fault_code: str,
+        event_type: int,
+        severity: int,
+        description: str,
+    ) -> None:
+        listener = withheld_listener(sink)
+        if listener is None:
+            return
+        config = self.local_filter.config
+        passed = event_type == _PASSED
+        seen = self.local_filter.tracked(fault_code, passed=passed)
+        reason = (
+            f"the {self.source_id} reporter's local filter held it: {seen} of "
+            f"{config.default_threshold} {'PASSED' if passed else 'FAILED'} report(s) within "
+            f"{config.default_window_sec:g} s"
+        )
+        listener.withheld(
+            t_ns, self.origin, topic, fault_code, event_type, severity, description,
+            self.source_id, "local_filter", reason,
+        )  # fmt: skip
 
 
 class ReporterCache:

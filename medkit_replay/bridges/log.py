@@ -14,6 +14,7 @@ from medkit_replay.bridges.base import (
     any_substring,
     passes_lists,
     resolve_topic,
+    withheld_listener,
 )
 from medkit_replay.bridges.codes import log_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
@@ -158,5 +159,17 @@ class LogBridge(MessageBridge):
             return
         code = self.fault_code(source_id, log.msg)
         if severity >= Severity.ERROR and not self.cooldown_allows(code, severity, t_ns):
+            listener = withheld_listener(report)
+            if listener is not None:
+                last = self._last_forward[(code, severity)]
+                reason = (
+                    f"the log bridge's cooldown held it: the same code at this severity was "
+                    f"forwarded {(t_ns - last) / NS_PER_SEC:.3f} s before "
+                    f"(report_cooldown_sec {self.config.report_cooldown_sec:g})"
+                )
+                listener.withheld(
+                    t_ns, self.origin, topic, code, 0, severity, log.msg, source_id,
+                    "cooldown", reason,
+                )  # fmt: skip
             return
         self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg, report)

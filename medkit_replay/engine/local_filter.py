@@ -74,6 +74,11 @@ class LocalFilter:
             times.popleft()
         return len(times) >= threshold
 
+    def tracked(self, fault_code: str, *, passed: bool) -> int:
+        """Reports of one code in its FAILED (or PASSED) window, as of the last decision."""
+        times = (self._passed if passed else self._failed).get(fault_code)
+        return len(times) if times is not None else 0
+
     def reset(self, fault_code: str) -> None:
         """Forget both trackers of one code."""
         self._failed.pop(fault_code, None)

@@ -33,6 +33,7 @@ from medkit_replay.model import (
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+    from medkit_replay.engine.correlation.engine import CorrelationResult
     from medkit_replay.engine.correlation.rules import CorrelationConfig
     from medkit_replay.model import Origin, RecordLog, RecordRows
 
@@ -43,6 +44,7 @@ _MAX_CACHED_SOURCES = 65536
 Row = tuple[object, ...]
 if TYPE_CHECKING:
     FieldsReporter: TypeAlias = Callable[[int, Origin, str | None, str, int, int, str, str], bool]
+    CorrelationWatcher: TypeAlias = Callable[[int, str, CorrelationResult], None]
 
 
 def _row_sink(log: RecordLog[_T], rows: RecordRows[_T]) -> Callable[[Row], None]:
@@ -91,6 +93,7 @@ class FaultManager:
         self.report_row = _row_sink(self.output.reports, REPORT_ROWS)
         self.event_row = _row_sink(self.output.events, EVENT_ROWS)
         self.transition_row = _row_sink(self.output.transitions, TRANSITION_ROWS)
+        self.correlation_watcher: CorrelationWatcher | None = None
         self.report_fields: FieldsReporter = self._fields_reporter()
         """Handle one ReportFault request given field by field; returns ``accepted``.
 
@@ -127,6 +130,12 @@ class FaultManager:
         self.report_row, self.event_row, self.transition_row = report, event, transition
         self.report_fields = self._fields_reporter()
 
+    def watch_correlation(self, watcher: CorrelationWatcher) -> None:
+        """Hand every correlation decision (bag time, fault code, upstream's result) to
+        ``watcher`` as it is made; it changes nothing (``explain`` records them)."""
+        self.correlation_watcher = watcher
+        self.report_fields = self._fields_reporter()
+
     def _fields_reporter(self) -> FieldsReporter:
         """Build :attr:`report_fields` with what it reads bound as locals (it runs per status)."""
         valid_codes, configs, output = self._valid_codes, self._configs, self.output
@@ -137,7 +146,7 @@ class FaultManager:
             self.correlation,
         )
         report_row, transition_row = self.report_row, self.transition_row
-        event = self._event
+        event, watcher = self._event, self.correlation_watcher
 
         def report_fields(
             t_ns: int,
@@ -189,6 +198,8 @@ class FaultManager:
             if correlation is not None and event_type == 0:
                 result = correlation.process_fault(fault_code, severity_name(severity), t_ns)
                 muted = result.should_mute
+                if watcher is not None:
+                    watcher(t_ns, fault_code, result)
                 if result.retroactive_mute_codes:
                     output.retroactive_mutes.append(
                         RetroactiveMute(

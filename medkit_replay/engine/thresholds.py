@@ -68,13 +68,18 @@ class EntityThresholdResolver:
         cached = self._cache.get(source_id)
         if cached is not None:
             return cached
+        best = self.prefix_for(source_id)
+        config = self.global_config if best is None else self._configs[best]
+        if len(self._cache) < 65536:
+            self._cache[source_id] = config
+        return config
+
+    def prefix_for(self, source_id: str) -> str | None:
+        """The entry whose band applies to ``source_id`` (None: the global config)."""
         best: str | None = None
         for prefix in self._configs:
             if (source_id == prefix or source_id.startswith(prefix + "/")) and (
                 best is None or len(prefix) > len(best)
             ):
                 best = prefix
-        config = self.global_config if best is None else self._configs[best]
-        if len(self._cache) < 65536:
-            self._cache[source_id] = config
-        return config
+        return best

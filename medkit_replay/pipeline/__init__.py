@@ -35,12 +35,14 @@ from medkit_replay.pipeline.assemble import assemble_result
 from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Router, recorded_report_codes
+from medkit_replay.pipeline.tracing import Tracer
 from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
     from medkit_replay.result import Result
+    from medkit_replay.trace import FaultTrace
 
 __all__ = ["PROGRESS_EVERY", "Phase", "Progress", "replay"]
 
@@ -54,6 +56,7 @@ def replay(
     *,
     progress: Callable[[Progress], None] | None = None,
     progress_every: int = PROGRESS_EVERY,
+    trace: FaultTrace | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -65,6 +68,10 @@ def replay(
             (``done``). Passes: ``prescan`` (recorded ReportFault calls; bags only), then
             ``replay``. The result does not depend on it; what it raises propagates.
         progress_every: messages between two calls.
+        trace: fill this FaultTrace with what the replay does with its fault code (the
+            requests and the messages behind them, held requests, correlation decisions,
+            transitions, events, clears, the state at ``trace.at_offset_ns``). The Result
+            does not depend on it.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -88,8 +95,11 @@ def replay(
     manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
     timeline = Timeline(manager)
     router = Router(options)
+    tracer = Tracer(trace, manager, router) if trace is not None else None
     recorded_codes = recorded_report_codes(paths, progress, progress_every)
     gate = Gate(timeline, recorded_codes)
+    if tracer is not None:
+        tracer.attach(gate)
     rosout = router.log is not None
     rosout_topic = router.log.topic if router.log is not None else "/rosout"
     with open_recording(
@@ -101,7 +111,7 @@ def replay(
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None
         )
-        messages = replay_loop(recording, meter, timeline, router, gate)
+        messages = replay_loop(recording, meter, timeline, router, gate, tracer)
         warnings += recording.warnings
         summaries = recording.inputs
         if meter is not None:

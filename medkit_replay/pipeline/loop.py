@@ -11,31 +11,46 @@ from medkit_replay.inputs import Message
 from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from medkit_replay.engine.timeline import Timeline
     from medkit_replay.inputs import Recording
     from medkit_replay.pipeline.meter import Meter
-    from medkit_replay.pipeline.routing import Gate, Handler, Router
+    from medkit_replay.pipeline.routing import Gate, Handler, Request, Router
+    from medkit_replay.pipeline.tracing import Tracer
 
 SETTLE_EVERY = 1024
 """Messages between two spills of the records the loop piled up (bounds memory)."""
 
 
 def replay_loop(
-    recording: Recording, meter: Meter | None, timeline: Timeline, router: Router, gate: Gate
+    recording: Recording,
+    meter: Meter | None,
+    timeline: Timeline,
+    router: Router,
+    gate: Gate,
+    tracer: Tracer | None = None,
 ) -> int:
     """Every message, in time order, to its bridge (field by field into the manager, which
-    records rows) or as request objects to the gate; timers run before each message's time."""
+    records rows) or as request objects to the gate; timers run before each message's time.
+
+    A ``tracer`` (``explain``) sees every message and request on the way and forwards them."""
     messages = 0
     next_at = meter.next_at if meter is not None else 0  # 0: never reached
     settle_at = SETTLE_EVERY
     output = timeline.manager.output
     logs = (output.reports, output.events, output.transitions)
     spools = [log for log in logs if isinstance(log, Spool)]
-    report, apply = gate.report, gate.apply
+    report = gate.report
+    apply: Callable[[Request], None] = gate.apply
+    tuples = recording.message_tuples()
+    if tracer is not None:
+        report, apply = tracer.sink(report), tracer.apply(apply)
+        tuples = tracer.messages(tuples, recording, timeline)
     handlers: dict[tuple[str, str, str], Handler | None] = {}
     due = timeline.due_ns()
     t_ns: int | None = None
-    for t_ns, input_index, topic, msgtype, role, msg in recording.message_tuples():
+    for t_ns, input_index, topic, msgtype, role, msg in tuples:
         messages += 1
         if messages == next_at and meter is not None:
             meter.tick(messages, t_ns)

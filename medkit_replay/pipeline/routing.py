@@ -113,6 +113,8 @@ class Gate:
         self.recorded_codes = recorded_codes
         self.withheld: Counter[str] = Counter()
         self.withheld_codes: dict[str, set[str]] = {}
+        self.on_withheld: Callable[[str, str], None] | None = None
+        """Told (origin, fault code) of every request held back (``explain`` listens)."""
         report_fields = timeline.manager.report_fields
         self.report: ReportSink = self._report_gated if recorded_codes else report_fields
         self._report_fields = report_fields
@@ -120,6 +122,8 @@ class Gate:
     def _withhold(self, origin: str, fault_code: str) -> None:
         self.withheld[origin] += 1
         self.withheld_codes.setdefault(origin, set()).add(fault_code)
+        if self.on_withheld is not None:
+            self.on_withheld(origin, fault_code)
 
     def apply(self, request: Request) -> None:
         """One request object (a script's, a recorded service call's)."""

@@ -377,6 +377,10 @@ class CorrelationEngine:
             return ()
         return tuple(sorted(ids, key=lambda c: c.encode("utf-8")))
 
+    def cluster_rule_of(self, code: str) -> CorrelationRule | None:
+        """The auto-cluster rule a code would join (the first whose patterns match it)."""
+        return self._roles_of(code).cluster_rule
+
     @property
     def muted_count(self) -> int:
         """Entries in the muted map (cluster mutes never count)."""

@@ -1,0 +1,99 @@
+"""``medkit-replay explain INPUT... CODE``: one fault's story, from the one replay, in order.
+
+Thin: replays with a FaultTrace for CODE, builds the story, draws it or writes its JSON.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from contextlib import nullcontext
+from pathlib import Path
+
+import click
+
+from medkit_replay.commands import config_option
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.explaining import (
+    build_story,
+    known_codes,
+    nearest_codes,
+    print_story,
+    write_story_json,
+)
+from medkit_replay.model import NS_PER_SEC
+from medkit_replay.outputs.progress import progress_bar
+from medkit_replay.pipeline import replay
+from medkit_replay.text import clip, printable
+from medkit_replay.trace import FaultTrace
+
+MAX_CODE_SHOWN = 200
+
+
+class UnknownCodeError(MedkitReplayError):
+    """The code asked for never appears in the recording (exit 2)."""
+
+
+def _at_offset_ns(at: float | None) -> int | None:
+    if at is None:
+        return None
+    if not math.isfinite(at):
+        raise click.BadParameter(f"{at!r} is not a time in seconds", param_hint="'--at'")
+    return round(at * NS_PER_SEC)
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("code", type=str)
+@config_option()
+@click.option(
+    "--at",
+    "at",
+    type=float,
+    default=None,
+    metavar="SECONDS",
+    help="Stop the story at this many seconds from the recording's start and show the fault's "
+    "state then.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Write the story as JSON records.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def explain(
+    inputs: tuple[Path, ...],
+    code: str,
+    configs: tuple[Path, ...],
+    at: float | None,
+    as_json: bool,
+    quiet: bool,
+) -> None:
+    """Tell the story of fault CODE in INPUT... (merged as one recording), in bag time.
+
+    Every report that reached it (its bridge, topic and recorded message; accepted or why
+    rejected; the debounce counter after it and the thresholds in force), the requests held
+    before the manager, each status change and its cause, the events published or withheld,
+    and every correlation decision. A code that never appears exits 2 naming the nearest ones.
+
+    \b
+    Examples:
+      medkit-replay explain mission/ MOTOR_LEFT_OVERHEAT --config robot_params.yaml
+      medkit-replay explain mission/ WIFI_SIGNAL_STRENGTH --config robot_params.yaml --at 57.3
+      medkit-replay explain run.jsonl MOTOR_OVERHEAT --json > story.json
+    """
+    trace = FaultTrace(fault_code=code, at_offset_ns=_at_offset_ns(at))
+    bar = progress_bar(sys.stderr, quiet=quiet)
+    with bar if bar is not None else nullcontext():
+        result = replay(list(inputs), list(configs), progress=bar, trace=trace)
+    if not trace.items:
+        nearest = nearest_codes(code, known_codes(result))
+        shown = ", ".join(printable(clip(c, MAX_CODE_SHOWN)) for c in nearest)
+        raise UnknownCodeError(
+            f"fault code '{printable(clip(code, MAX_CODE_SHOWN))}' never appears in the "
+            "recording; "
+            + (f"nearest codes: {shown}" if nearest else "no fault code appears at all")
+        )
+    story = build_story(result, trace)
+    with standard_output("the story"):
+        if as_json:
+            write_story_json(story, sys.stdout)
+        else:
+            print_story(story, sys.stdout)
