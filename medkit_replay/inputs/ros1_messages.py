@@ -56,9 +56,10 @@ def log_level(ros1_level: int) -> int:
 
     DEBUG 1, INFO 2, WARN 4, ERROR 8, FATAL 16 become 10, 20, 30, 40, 50; 0 stays 0 (UNSET);
     a value of several flags takes its highest (6 is WARN); 32 and above become 60 to 80,
-    levels the log bridge treats as it treats any level it does not know.
+    levels the log bridge treats as it treats any level it does not know. The field is a
+    ROS 1 ``byte`` (rosbags decodes it signed): its bits are read unsigned.
     """
-    return 10 * max(0, int(ros1_level)).bit_length()
+    return 10 * (int(ros1_level) & 0xFF).bit_length()
 
 
 @lru_cache(maxsize=4096)
