@@ -107,7 +107,7 @@ class Rosbag1Input:
         if magic != rec.MAGIC:
             if magic.startswith(b"#ROSBAG V"):
                 shown = magic.decode("ascii", "replace").strip()
-                raise _NotABagError(f"ROS 1 bag of format {shown[8:]!r}; only 2.0 is read")
+                raise _NotABagError(f"ROS 1 bag of format {shown[9:]!r}; only 2.0 is read")
             raise _NotABagError("not a ROS 1 bag (bad magic)")
         try:
             fields, data_start, data_end = self._record_at(len(rec.MAGIC))

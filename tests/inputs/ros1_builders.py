@@ -6,10 +6,12 @@ the same bag without its index; the walker finds records to damage.
 
 from __future__ import annotations
 
+import bz2
 import struct
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
+import lz4.frame  # type: ignore[import-untyped]
 from rosbags.rosbag1 import Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -175,3 +177,41 @@ def patched(source: Path, target: Path, offset: int, value: bytes) -> Path:
     data[offset : offset + len(value)] = value
     target.write_bytes(bytes(data))
     return target
+
+
+def _fields(header: bytes) -> dict[bytes, bytes]:
+    out, pos = {}, 0
+    while pos < len(header):
+        (length,) = struct.unpack_from("<I", header, pos)
+        name, _, value = header[pos + 4 : pos + 4 + length].partition(b"=")
+        out[name] = value
+        pos += 4 + length
+    return out
+
+
+def chunk_messages(path: Path) -> list[tuple[int, list[int]]]:
+    """(end offset, log times of its messages) of each chunk of a well-formed bag (test-side)."""
+    data = path.read_bytes()
+    found = []
+    for record in records(path):
+        if record.op != 0x05:
+            continue
+        (header_len,) = struct.unpack_from("<I", data, record.start)
+        compression = _fields(data[record.start + 4 : record.start + 4 + header_len])[
+            b"compression"
+        ]
+        body = data[record.data_start : record.end]
+        body = {b"none": bytes, b"bz2": bz2.decompress, b"lz4": lz4.frame.decompress}[compression](
+            body
+        )
+        pos, t_ns = 0, []
+        while pos < len(body):
+            (inner_len,) = struct.unpack_from("<I", body, pos)
+            fields = _fields(body[pos + 4 : pos + 4 + inner_len])
+            (data_len,) = struct.unpack_from("<I", body, pos + 4 + inner_len)
+            if fields[b"op"] == b"\x02":
+                sec, nsec = struct.unpack("<II", fields[b"time"])
+                t_ns.append(sec * 10**9 + nsec)
+            pos += 8 + inner_len + data_len
+        found.append((record.end, t_ns))
+    return found
