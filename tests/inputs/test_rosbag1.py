@@ -59,8 +59,8 @@ def test_diagnostics_arrive_as_ros2_diagnostic_arrays(tmp_path: Path) -> None:
     assert message.msgtype == "diagnostic_msgs/msg/DiagnosticArray"
     types = base_typestore().types
     msg: Any = message.msg
-    assert type(msg) is types["diagnostic_msgs/msg/DiagnosticArray"]
-    assert type(msg.header) is types["std_msgs/msg/Header"]
+    assert type(message.msg) is types["diagnostic_msgs/msg/DiagnosticArray"]
+    assert msg.header.__msgtype__ == "std_msgs/msg/Header"
     assert not hasattr(msg.header, "seq")
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id) == (
         T // S,
@@ -68,7 +68,7 @@ def test_diagnostics_arrive_as_ros2_diagnostic_arrays(tmp_path: Path) -> None:
         "base",
     )
     (status,) = msg.status
-    assert type(status) is types["diagnostic_msgs/msg/DiagnosticStatus"]
+    assert status.__msgtype__ == "diagnostic_msgs/msg/DiagnosticStatus"
     assert (status.level, status.name, status.message, status.hardware_id) == (
         2,
         "motor: Temp",
@@ -85,7 +85,7 @@ def test_goal_status_arrays_arrive_on_the_ros2_status_topic(tmp_path: Path) -> N
     assert message.msgtype == "action_msgs/msg/GoalStatusArray"
     assert message.role == "action_status"
     msg: Any = message.msg
-    assert type(msg) is base_typestore().types["action_msgs/msg/GoalStatusArray"]
+    assert type(message.msg) is base_typestore().types["action_msgs/msg/GoalStatusArray"]
     first, second = msg.status_list
     assert [first.status, second.status] == [2, 6]  # EXECUTING, ABORTED
     expected = uuid.uuid5(GOAL_ID_NAMESPACE, "/client-1-5.0").bytes
@@ -103,7 +103,7 @@ def test_log_lines_arrive_as_rcl_interfaces_logs(tmp_path: Path) -> None:
         "rosout",
     )
     msg: Any = message.msg
-    assert type(msg) is base_typestore().types["rcl_interfaces/msg/Log"]
+    assert type(message.msg) is base_typestore().types["rcl_interfaces/msg/Log"]
     assert (msg.level, msg.name, msg.msg, msg.file, msg.function, msg.line) == (
         40,
         "/ns/planner",
