@@ -114,6 +114,9 @@ class Rosbag1Input:
             header = rec.bag_header(fields)
         except (RecordDamageError, EOFError) as exc:
             raise _NotABagError(f"ROS 1 bag header record is damaged ({exc})") from None
+        encryptor = rec.string(fields, "encryptor", "")
+        if encryptor:
+            raise _NotABagError(f"ROS 1 bag encrypted with {encryptor!r}; cannot be read")
         self._data_start = data_end
         self._data_end = self._size
         del data_start
@@ -140,12 +143,12 @@ class Rosbag1Input:
         """
         head = self._read_at(pos, 4)
         if len(head) < 4:
-            raise EOFError
+            raise EOFError("the file ends inside it")
         header_len = int.from_bytes(head, "little")
         if header_len > rec.HEADER_SIZE_LIMIT:
             raise RecordDamageError(f"record header of {header_len} bytes")
         if pos + 8 + header_len > self._size:
-            raise EOFError
+            raise EOFError("the file ends inside it")
         block = self._read_at(pos + 4, header_len + 4)
         fields = rec.parse_fields(block[:header_len])
         data_len = int.from_bytes(block[header_len:], "little")
@@ -153,7 +156,7 @@ class Rosbag1Input:
         if data_len > RECORD_SIZE_LIMIT:
             raise RecordDamageError(f"record data of {data_len} bytes")
         if start + data_len > self._size:
-            raise EOFError
+            raise EOFError("the file ends inside it")
         return fields, start, start + data_len
 
     def _read_index(self, header: rec.BagHeader) -> None:

@@ -252,7 +252,7 @@ def _field(bag: Path, where: str) -> tuple[int, int]:
         (b"not a bag at all, just text\n" * 4, "not a ROS 1 bag (bad magic)"),
         (b"#ROSBAG V1.2\n" + bytes(64), "ROS 1 bag of format '1.2'; only 2.0 is read"),
         (MAGIC + b"\xff\xff\xff\x7f", "ROS 1 bag header record is damaged"),
-        (MAGIC + bytes(3), "ROS 1 bag header record is damaged"),
+        (MAGIC + bytes(3), "ROS 1 bag header record is damaged (the file ends inside it)"),
     ],
 )
 def test_a_file_that_is_no_bag_is_one_input_error(
@@ -263,6 +263,30 @@ def test_a_file_that_is_no_bag_is_one_input_error(
     got = attempt(path)
     assert isinstance(got, InputError)
     assert str(got).startswith(f"{path}: {reason}")
+
+
+def _field_bytes(name: bytes, value: bytes) -> bytes:
+    return (len(name) + 1 + len(value)).to_bytes(4, "little") + name + b"=" + value
+
+
+def test_an_encrypted_bag_is_one_input_error(tmp_path: Path) -> None:
+    header = b"".join(
+        _field_bytes(name, value)
+        for name, value in (
+            (b"op", b"\x03"),
+            (b"index_pos", bytes(8)),
+            (b"conn_count", bytes(4)),
+            (b"chunk_count", bytes(4)),
+            (b"encryptor", b"rosbag/AesCbcEncryptor"),
+        )
+    )
+    path = tmp_path / "secret.bag"
+    path.write_bytes(MAGIC + len(header).to_bytes(4, "little") + header + bytes(4))
+    got = attempt(path)
+    assert isinstance(got, InputError)
+    assert str(got) == (
+        f"{path}: ROS 1 bag encrypted with 'rosbag/AesCbcEncryptor'; cannot be read"
+    )
 
 
 def test_a_chunk_of_unknown_compression_is_named(tmp_path: Path) -> None:
