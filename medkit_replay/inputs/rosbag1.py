@@ -14,6 +14,7 @@ from medkit_replay.files import open_regular
 from medkit_replay.inputs import rosbag1_records as rec
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed, reorder_batches
+from medkit_replay.inputs.ros1_diagnostics import DECODERS
 from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore, standard_md5
 from medkit_replay.inputs.rosbag1_records import RecordDamageError
 from medkit_replay.inputs.source import Message
@@ -242,6 +243,9 @@ class Rosbag1Input:
                 f"topic {connection.topic}: type {connection.msgtype} recorded with md5sum "
                 f"{connection.md5sum!r}, not the standard one; decoded with the standard definition"
             )
+        fast = DECODERS.get(ros1_type)
+        if fast is not None:
+            return _Reader(role, topic, msgtype, fast)
         deserialize = store.deserialize_ros1
         if translation is None:
             return _Reader(role, topic, msgtype, lambda raw: deserialize(raw, ros1_type))
