@@ -386,17 +386,28 @@ class Rosbag1Input:
         Raises:
             RuntimeError: called a second time.
         """
+        self._claim()
+        return self._stream(timed=True)  # type: ignore[return-value]  # Timed items
+
+    def message_tuples(self) -> Iterator[tuple[int, int, str, str, Role, object]]:
+        """:meth:`messages` as plain tuples laid out as Message, without their positions (a
+        recording of one input needs none; cheaper to build)."""
+        self._claim()
+        return self._stream(timed=False)  # type: ignore[return-value]  # tuples
+
+    def _claim(self) -> None:
         if self._used:
             raise RuntimeError(f"{self.path}: messages() can be read only once")
         self._used = True
-        return self._stream()
 
-    def _stream(self) -> Iterator[Timed[Message]]:
-        input_index = self.ctx.input_index
+    def _stream(
+        self, *, timed: bool
+    ) -> Iterator[Timed[Message] | tuple[int, int, str, str, Role, object]]:
+        input_index, readers = self.ctx.input_index, self._readers
         try:
             for batch in reorder_batches(self._guarded_scan(), self._on_late, MAX_HELD):
                 for t_ns, position, raw in batch:
-                    reader = self._readers[raw.connection]
+                    reader = readers[raw.connection]
                     assert reader is not None
                     try:
                         msg = reader.decode(raw.data)
@@ -405,11 +416,12 @@ class Rosbag1Input:
                     except Exception as exc:  # rosbags raises struct.error, IndexError, ...
                         self._failed(reader.topic, t_ns, exc)
                         continue
-                    yield Timed(
-                        t_ns,
-                        position,
-                        Message(t_ns, input_index, reader.topic, reader.msgtype, reader.role, msg),
-                    )
+                    topic, msgtype, role = reader.topic, reader.msgtype, reader.role
+                    if timed:
+                        message = Message(t_ns, input_index, topic, msgtype, role, msg)
+                        yield Timed(t_ns, position, message)
+                    else:
+                        yield (t_ns, input_index, topic, msgtype, role, msg)
         finally:
             self._report_losses()
 
