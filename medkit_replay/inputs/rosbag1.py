@@ -36,6 +36,8 @@ MAX_HELD = 100_000
 INDEX_SIZE_LIMIT = 256 * 1024 * 1024
 """Largest index section (connections and chunk infos) read into memory; larger is damage."""
 _CODECS = {"none": "", "bz2": "bz2", "lz4": "lz4"}
+ROS1_ROLES: frozenset[Role] = frozenset({"diagnostics", "action_status", "rosout", "extra"})
+"""The roles a ROS 1 bag's topics can have (ROS 1 has no ros2_medkit service events)."""
 
 
 class _Reader(NamedTuple):
@@ -256,6 +258,9 @@ class Rosbag1Input:
 
     def _scan(self) -> Iterator[Bound | list[Timed[_Raw]]]:
         """Every chunk in file order: bounds and the wanted messages of each, sorted."""
+        only = self.ctx.selection.only_roles
+        if only is not None and not only & ROS1_ROLES:
+            return  # e.g. the pre-pass over recorded service calls, which ROS 1 has none of
         positions = sorted(self._chunks)
         floors: dict[int, int] = {}  # earliest start of this chunk and every later one
         floor: int | None = None

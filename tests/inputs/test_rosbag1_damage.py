@@ -316,3 +316,17 @@ def test_messages_whose_connection_record_is_lost_are_counted(tmp_path: Path) ->
     messages, warnings = got
     assert any("belong to connections whose records are lost" in w for w in warnings)
     assert len(messages) < len(full(bag))
+
+
+def test_the_service_call_pre_pass_reads_no_chunk(tmp_path: Path) -> None:
+    """ROS 1 has no ros2_medkit service events: a pass for them reads nothing."""
+    bag = good_bag(tmp_path, "lz4")
+    pos, start, end = chunk_spans(bag)[2]
+    damaged = patched(bag, tmp_path / "corrupt.bag", (start + end) // 2, b"\xa5" * 6)
+    cut = unindexed(damaged, tmp_path / "unindexed.bag")
+    with open_recording([cut], only_roles=["report_fault"]) as recording:
+        assert list(recording.messages()) == []
+        assert not [w for w in recording.warnings if f"chunk at byte {pos}" in w]
+    with open_recording([cut]) as recording:
+        list(recording.messages())
+        assert [w for w in recording.warnings if f"chunk at byte {pos}" in w]
