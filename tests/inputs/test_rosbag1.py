@@ -366,3 +366,25 @@ def test_messages_out_of_order_across_chunks_come_out_in_order(tmp_path: Path) -
     messages, warnings = read(bag)
     assert [m.t_ns for m in messages] == sorted(T + k * S for k in range(40))
     assert warnings == []
+
+
+def test_a_type_recorded_with_another_md5sum_is_decoded_with_a_warning(tmp_path: Path) -> None:
+    from rosbags.rosbag1 import Writer  # noqa: PLC0415
+
+    from tests.inputs.ros1_builders import TS1  # noqa: PLC0415
+
+    rec = diag1(T)
+    path = tmp_path / "md5.bag"
+    with Writer(path) as writer:
+        msgdef = TS1.generate_msgdef(rec.msgtype, ros_version=1)[0]
+        connection = writer.add_connection(
+            "/diagnostics", rec.msgtype, msgdef=msgdef, md5sum="0123456789abcdef" * 2
+        )
+        writer.write(connection, T, bytes(TS1.serialize_ros1(rec.msg, rec.msgtype)))
+    (message,), warnings = read(path)
+    assert message.msg.heads == [(2, "motor", "hot", "hw")]  # type: ignore[attr-defined]
+    assert warnings == [
+        f"{path}: topic /diagnostics: type diagnostic_msgs/DiagnosticArray recorded with md5sum "
+        "'0123456789abcdef0123456789abcdef', not the standard one; decoded with the standard "
+        "definition"
+    ]
