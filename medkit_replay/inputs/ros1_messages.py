@@ -226,18 +226,35 @@ def goal_status_array(msg: object) -> object:
 
 
 def log(msg: object) -> object:
-    """rosgraph_msgs/Log → rcl_interfaces/msg/Log: level mapped (:func:`log_level`), the header's
-    stamp kept; ``name`` (the node's name, ``/ns/node``) unchanged; ``topics`` dropped."""
-    r = _ros2()
+    """rosgraph_msgs/Log → rcl_interfaces/msg/Log: see :func:`ros2_log`."""
     line = cast("_Log", msg)
+    stamp = line.header.stamp
+    fields = (line.level, line.name, line.msg, line.file, line.function, line.line)
+    return ros2_log(stamp.sec, stamp.nanosec, *fields)
+
+
+def ros2_log(
+    sec: int,
+    nanosec: int,
+    ros1_level: int,
+    name: str,
+    msg: str,
+    file: str,
+    function: str,
+    line: int,
+) -> object:
+    """The rcl_interfaces/msg/Log of a rosgraph_msgs/Log's fields: level mapped
+    (:func:`log_level`), the header's stamp kept, ``name`` (the node's full name, ``/ns/node``)
+    unchanged; the header's ``seq`` and ``frame_id`` and the ``topics`` have no ROS 2 field."""
+    r = _ros2()
     return r.log(
-        stamp=_stamp(r, line.header.stamp),
-        level=log_level(line.level),
-        name=line.name,
-        msg=line.msg,
-        file=line.file,
-        function=line.function,
-        line=line.line,
+        stamp=r.time(sec=sec, nanosec=nanosec),
+        level=log_level(ros1_level),
+        name=name,
+        msg=msg,
+        file=file,
+        function=function,
+        line=line,
     )
 
 

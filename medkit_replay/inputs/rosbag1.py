@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import Timed, reorder_batches
-from medkit_replay.inputs.ros1_diagnostics import DECODERS
+from medkit_replay.inputs.ros1_decoders import DECODERS
 from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore, standard_md5
 from medkit_replay.inputs.rosbag1_file import Bag1File
 from medkit_replay.inputs.source import Message

@@ -1,6 +1,6 @@
-"""A hand-written decoder for ROS 1 diagnostic_msgs/DiagnosticArray payloads, the hottest type.
+"""Hand-written decoders for the two ROS 1 types read most, DiagnosticArray and Log.
 
-Hands the diagnostic bridge each status's head; the full ROS 2 message is built on first read.
+Each checks a payload as rosbags would and leaves any payload it refuses to rosbags' own error.
 """
 
 from __future__ import annotations
@@ -10,14 +10,18 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.inputs.ros1_messages import (
     ROS1_DIAGNOSTIC_ARRAY,
+    ROS1_LOG,
     diagnostic_array,
+    log,
     ros1_typestore,
+    ros2_log,
 )
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
 _U32 = struct.Struct("<I").unpack_from
+_SEQ_AND_STAMP = struct.Struct("<IiI").unpack_from  # as rosbags: Time.sec int32, nanosec uint32
 _HEADER_BYTES = 12  # seq, stamp.sec, stamp.nsec
 _MIN_STATUS_BYTES = 1 + 4 * 4  # level, three empty strings, no values
 _MIN_PAIR_BYTES = 2 * 4
@@ -113,5 +117,44 @@ def _skip_string(raw: bytes, pos: int, end: int) -> int:
     return _string(raw, pos, end)[1]
 
 
-DECODERS: dict[str, Callable[[bytes], object]] = {ROS1_DIAGNOSTIC_ARRAY: decode_diagnostic_array}
+def full_decode_log(raw: bytes) -> object:
+    """rosbags' decoding of a rosgraph_msgs/Log payload (its errors are the ones reported)."""
+    return ros1_typestore().deserialize_ros1(raw, ROS1_LOG)
+
+
+def decode_log(raw: bytes) -> object:
+    """A rosgraph_msgs/Log payload as rcl_interfaces/msg/Log (:func:`ros2_log`), walked by hand.
+
+    A payload the walk refuses is decoded by rosbags, which raises its own error for it.
+    """
+    try:
+        return _log(raw)
+    except (ValueError, IndexError, struct.error):  # UnicodeDecodeError is a ValueError
+        return log(full_decode_log(raw))
+
+
+def _log(raw: bytes) -> object:
+    end = len(raw)
+    _, sec, nanosec = _SEQ_AND_STAMP(raw, 0)
+    pos = _skip_string(raw, _HEADER_BYTES, end)  # frame_id
+    level = raw[pos]
+    name, pos = _string(raw, pos + 1, end)
+    msg, pos = _string(raw, pos, end)
+    file, pos = _string(raw, pos, end)
+    function, pos = _string(raw, pos, end)
+    line, topics = _U32(raw, pos)[0], _U32(raw, pos + 4)[0]
+    pos += 8
+    if topics > (end - pos) // 4:
+        raise ValueError("more topics than bytes")
+    for _ in range(topics):
+        pos = _skip_string(raw, pos, end)
+    if pos != end:
+        raise ValueError("bytes left after the topics")
+    return ros2_log(sec, nanosec, level, name, msg, file, function, line)
+
+
+DECODERS: dict[str, Callable[[bytes], object]] = {
+    ROS1_DIAGNOSTIC_ARRAY: decode_diagnostic_array,
+    ROS1_LOG: decode_log,
+}
 """Hand-written decoders by ROS 1 type: payload to the message the bridges read."""
