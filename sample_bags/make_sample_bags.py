@@ -1,5 +1,7 @@
 """Builds the bundled sample recordings (a Nav2 mission, recorded fault-manager service calls).
 
+The mission is also written as a ROS 1 bag: the same traffic in ROS 1 types, topics and codes.
+
 Deterministic: fixed start time and seeds, no wall clock; every run writes the same messages.
 """
 
@@ -16,8 +18,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
+from rosbags.typesys import Stores, get_typestore
 
 from medkit_replay.msgdefs import base_typestore
 
@@ -35,6 +39,7 @@ T0_NS = 1_773_480_413 * NS
 
 NAV2_MCAP = "nav2_mission_mcap"
 NAV2_SQLITE3 = "nav2_mission_sqlite3"
+NAV2_ROS1 = "nav2_mission_ros1.bag"
 SERVICE_CALLS = "service_calls.mcap"
 
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
@@ -663,6 +668,159 @@ def service_calls() -> list[Rec]:
     return sorted(rec.records, key=lambda r: r.t_ns)
 
 
+# -- the mission as a ROS 1 bag ------------------------------------------------------------------
+
+TS1 = get_typestore(Stores.ROS1_NOETIC)
+ROS1_STATUS = {ACCEPTED: 0, EXECUTING: 1, CANCELING: 6, SUCCEEDED: 3, CANCELED: 2, ABORTED: 4}
+"""action_msgs GoalStatus codes to the actionlib ones a ROS 1 server publishes for the same goal:
+ACCEPTED is PENDING, EXECUTING ACTIVE, CANCELING PREEMPTING, CANCELED (once executing)
+PREEMPTED."""
+ROS1_LEVEL = {INFO: 2, LOG_WARN: 4, LOG_ERROR: 8, FATAL: 16}
+"""rcl_interfaces/msg/Log levels to rosgraph_msgs/Log ones."""
+DIAGNOSTIC_PUBLISHERS = {p.checks[0].name: f"/{p.node}" for p in PUBLISHERS}
+
+
+@dataclass(frozen=True, slots=True)
+class Rec1:
+    """One ROS 1 message to write: topic, ROS 1 type, log time (ns), message, publishing node."""
+
+    topic: str
+    msgtype: str
+    t_ns: int
+    msg: object
+    callerid: str
+
+
+def new1(msgtype: str, /, **fields: Any) -> object:
+    """A message of a ROS 1 Noetic type."""
+    return TS1.types[msgtype](**fields)
+
+
+def stamp1(stamp: Any) -> object:
+    """ROS 1 time of a builtin_interfaces/msg/Time."""
+    return new1("builtin_interfaces/msg/Time", sec=stamp.sec, nanosec=stamp.nanosec)
+
+
+def header1(seq: int, stamp: Any, frame_id: str = "") -> object:
+    """std_msgs/Header with its ROS 1 sequence number."""
+    return new1("std_msgs/msg/Header", seq=seq, stamp=stamp1(stamp), frame_id=frame_id)
+
+
+def ros1_mission() -> list[Rec1]:
+    """The Nav2 mission as a ROS 1 robot records it, message for message.
+
+    DiagnosticArrays get a header ``seq`` per publisher; each action's ``<action>/status``
+    carries actionlib codes and string goal ids; /rosout lines carry ROS 1 levels and node names
+    (``/amcl``), and the rosout node republishes each on /rosout_agg, as on a ROS 1 robot.
+    """
+    out: list[Rec1] = []
+    seqs: dict[str, int] = {}
+    goal_ids: dict[bytes, str] = {}
+
+    def seq(key: str) -> int:
+        seqs[key] = seqs.get(key, 0) + 1
+        return seqs[key]
+
+    for rec in nav2_mission():
+        msg: Any = rec.msg
+        if rec.msgtype == DIAGNOSTIC_ARRAY:
+            node = DIAGNOSTIC_PUBLISHERS[msg.status[0].name]
+            statuses = [
+                new1(
+                    "diagnostic_msgs/msg/DiagnosticStatus",
+                    level=s.level,
+                    name=s.name,
+                    message=s.message,
+                    hardware_id=s.hardware_id,
+                    values=[
+                        new1("diagnostic_msgs/msg/KeyValue", key=kv.key, value=kv.value)
+                        for kv in s.values
+                    ],
+                )
+                for s in msg.status
+            ]
+            array = new1(
+                "diagnostic_msgs/msg/DiagnosticArray",
+                header=header1(seq(node), msg.header.stamp),
+                status=statuses,
+            )
+            out.append(
+                Rec1("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", rec.t_ns, array, node)
+            )
+        elif rec.msgtype == GOAL_STATUS_ARRAY:
+            action = rec.topic.removesuffix("/_action/status")
+            server = "/bt_navigator" if action == "/navigate_to_pose" else "/controller_server"
+            goals = []
+            for goal in msg.status_list:
+                key = bytes(goal.goal_info.goal_id.uuid)
+                sent = goal.goal_info.stamp
+                name = goal_ids.setdefault(
+                    key, f"{server}-{len(goal_ids) + 1}-{sent.sec}.{sent.nanosec:09d}"
+                )
+                goal_id = new1("actionlib_msgs/msg/GoalID", stamp=stamp1(sent), id=name)
+                goals.append(
+                    new1(
+                        "actionlib_msgs/msg/GoalStatus",
+                        goal_id=goal_id,
+                        status=ROS1_STATUS[goal.status],
+                        text="",
+                    )
+                )
+            now = stamp(rec.t_ns)
+            array = new1(
+                "actionlib_msgs/msg/GoalStatusArray",
+                header=header1(seq(action), now),
+                status_list=goals,
+            )
+            out.append(
+                Rec1(
+                    f"{action}/status",
+                    "actionlib_msgs/msg/GoalStatusArray",
+                    rec.t_ns,
+                    array,
+                    server,
+                )
+            )
+        elif rec.msgtype == LOG:
+            node = f"/{msg.name}"
+            line = new1(
+                "rosgraph_msgs/msg/Log",
+                header=header1(seq(node), msg.stamp),
+                level=ROS1_LEVEL[msg.level],
+                name=node,
+                msg=msg.msg,
+                file=msg.file,
+                function=msg.function,
+                line=msg.line,
+                topics=["/rosout", "/diagnostics"],
+            )
+            out.append(Rec1("/rosout", "rosgraph_msgs/msg/Log", rec.t_ns, line, node))
+            out.append(
+                Rec1("/rosout_agg", "rosgraph_msgs/msg/Log", rec.t_ns + 300_000, line, "/rosout")
+            )
+    return sorted(out, key=lambda r: r.t_ns)
+
+
+def write_bag1(path: Path, records: Iterable[Rec1]) -> Path:
+    """Write records as a ROS 1 bag with LZ4-compressed 16 KiB chunks, replacing ``path``."""
+    path.unlink(missing_ok=True)
+    writer = Writer1(path)
+    writer.set_compression(Writer1.CompressionFormat.LZ4)
+    writer.chunk_threshold = 16 * 1024
+    connections: dict[tuple[str, str], Any] = {}
+    with writer:
+        for rec in records:
+            key = (rec.topic, rec.callerid)
+            if key not in connections:
+                connections[key] = writer.add_connection(
+                    rec.topic, rec.msgtype, typestore=TS1, callerid=rec.callerid
+                )
+            writer.write(
+                connections[key], rec.t_ns, bytes(TS1.serialize_ros1(rec.msg, rec.msgtype))
+            )
+    return path
+
+
 # -- writing ------------------------------------------------------------------------------------
 
 
@@ -716,6 +874,7 @@ def build(out: Path) -> list[Path]:
         write_bag(out / NAV2_MCAP, mission, StoragePlugin.MCAP),
         write_bag(out / NAV2_SQLITE3, mission, StoragePlugin.SQLITE3),
         write_bare_mcap(out / SERVICE_CALLS, service_calls()),
+        write_bag1(out / NAV2_ROS1, ros1_mission()),
     ]
 
 

@@ -185,3 +185,22 @@ def _imported(path: Path) -> set[str]:
 def test_the_diff_itself_draws_nothing(module: str) -> None:
     imported = _imported(PACKAGE / "diffing" / module)
     assert not [n for n in imported if n.startswith(("rich", "medkit_replay.outputs"))]
+
+
+PURE_INPUT_MODULES = {
+    # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; rosbag1.py reads.
+    "rosbag1_records.py": set(),
+    "ros1_messages.py": {"medkit_replay.msgdefs"},
+    "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
+}
+"""Modules of inputs that parse or map values they are given: no file access, few imports."""
+
+
+@pytest.mark.parametrize("module", sorted(PURE_INPUT_MODULES))
+def test_pure_input_modules_read_no_files(module: str) -> None:
+    path = PACKAGE / "inputs" / module
+    ours = {n for n in _imported(path) if n.startswith("medkit_replay")}
+    assert ours <= PURE_INPUT_MODULES[module]
+    text = path.read_text(encoding="utf-8")
+    for needle in ("open(", "Path", "os."):
+        assert needle not in text, f"{module} uses {needle}"

@@ -80,7 +80,8 @@ def rebuilt(tmp_path_factory: pytest.TempPathFactory) -> Path:
         cwd=ROOT,
     )
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines() == [f"wrote {out / name}" for name in SAMPLE_NAMES]
+    written = (*SAMPLE_NAMES, "nav2_mission_ros1.bag")  # the ROS 1 bag: tests/test_sample_ros1.py
+    assert done.stdout.splitlines() == [f"wrote {out / name}" for name in written]
     return out
 
 

@@ -88,9 +88,10 @@ def fleet(
 ) -> None:
     """Replay every recording under INPUT_DIR... as its own run and compare the runs.
 
-    Recordings: rosbag2 folders, bare .mcap and .db3 files, .jsonl scripts. A recording that
-    cannot be replayed, times out or whose worker dies is reported in its row; the others
-    still run. Exit status: 1 when --budget is given and a run failed it or failed at all.
+    Recordings: rosbag2 folders, bare .mcap and .db3 files, ROS 1 .bag files, .jsonl scripts.
+    A recording that cannot be replayed, times out or whose worker dies is reported in its
+    row; the others still run. Exit status: 1 when --budget is given and a run failed it or
+    failed at all.
 
     \b
     Examples:
@@ -120,7 +121,7 @@ def fleet(
     recordings = discover(input_dirs)
     if not recordings:
         raise InputError(
-            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
+            "no recording found (rosbag2 folders, .mcap, .db3, .bag or .jsonl files)",
             path=", ".join(str(d) for d in input_dirs),
         )
     try:

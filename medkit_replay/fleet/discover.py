@@ -7,8 +7,8 @@ Rules (README "Fleets"):
 - so is a folder without ``metadata.yaml`` whose storage files are all named after it as
   rosbag2 names them (``run/run_0.mcap``, ``run/run_1.mcap``: a recording cut before its
   metadata was written);
-- any other ``.mcap`` or ``.db3`` file is a bare recording of its own, and a ``.jsonl`` file a
-  script;
+- any other ``.mcap`` or ``.db3`` file is a bare recording of its own, so is a ROS 1 ``.bag``
+  file, and a ``.jsonl`` file a script;
 - hidden files and folders (``.name``) are skipped; symbolic links are followed once;
 - a FIFO, device or socket named like a recording is listed too: its run says why it cannot
   be read (never skipped in silence, never opened).
@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterable
 
 FILE_KINDS = frozenset(kind for kind in READERS if kind != "dir")
-"""Suffixes of files replayed on their own: ``.mcap``, ``.db3``, ``.jsonl``."""
+"""Suffixes of files replayed on their own: ``.mcap``, ``.db3``, ``.bag``, ``.jsonl``."""
 STORAGE_SUFFIXES = frozenset({".mcap", ".db3"})
 """Suffixes of rosbag2 storage files (after a ``.zstd`` file-compression suffix is removed)."""
 _NUMBER = re.compile(r"(\d+)")

@@ -27,8 +27,8 @@ if TYPE_CHECKING:
 TOP_CODES = 5
 """Codes listed per run, most FAILED reports first."""
 
-KINDS = {"dir": "rosbag2", ".mcap": "mcap", ".db3": "db3", ".jsonl": "script"}
-"""A run's ``kind`` by READERS key: a bag directory, a bare storage file or a script."""
+KINDS = {"dir": "rosbag2", ".mcap": "mcap", ".db3": "db3", ".bag": "rosbag1", ".jsonl": "script"}
+"""A run's ``kind`` by READERS key: a bag directory, a bare storage file, a ROS 1 bag, a script."""
 MAX_ERROR_CHARS = 4000
 """A run's error is cut here (an ellipsis ends it): a message quoting a 10 MB field stays short."""
 
@@ -39,7 +39,8 @@ class RunSummary:
 
     Attributes:
         path: the recording, as discovered.
-        kind: ``rosbag2`` (a bag directory), ``mcap`` or ``db3`` (a bare file), ``script``.
+        kind: ``rosbag2`` (a bag directory), ``mcap`` or ``db3`` (a bare file), ``rosbag1`` (a
+            ROS 1 bag), ``script``.
         start_ns, end_ns: first and last log time of the recording (None when nothing was read).
         messages: messages the replay read (None when the run failed).
         faults_by_status: final status counts, every status of ``result.STATUSES`` in order.

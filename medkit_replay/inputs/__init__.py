@@ -1,7 +1,8 @@
 """Inputs: recording files turned into one time-ordered stream of decoded, typed messages.
 
 rosbag2 directories (metadata.yaml; sqlite3 or MCAP storage; split files; zstd file or message
-compression) and bare ``.mcap`` / ``.db3`` files are read streaming and read-only; several inputs
+compression), bare ``.mcap`` / ``.db3`` files and ROS 1 ``.bag`` files (their messages mapped to
+the ROS 2 types the bridges read) are read streaming and read-only; several inputs
 merge in (log time, input index, position) order. Only the topics the replay needs are decoded
 (:class:`Selection`), by decoders generated from the recording's own definitions or bundled
 ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP

@@ -1,10 +1,11 @@
-"""Bounded decompression of MCAP chunks: never more output than the chunk declares, plus one byte.
+"""Bounded decompression of MCAP and ROS 1 bag chunks: never more output than declared, plus 1 byte.
 
 A chunk that expands past or short of its declared size, or fails its checksum, is damage.
 """
 
 from __future__ import annotations
 
+import bz2
 import sys
 from binascii import crc32
 from typing import TYPE_CHECKING, Protocol
@@ -19,9 +20,10 @@ else:  # the zstd binding rosbags itself depends on
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-MAX_RATIO = {"zstd": 32 * 1024, "lz4": 256}
+MAX_RATIO = {"zstd": 32 * 1024, "lz4": 256, "bz2": 64 * 1024 * 1024}
 """Most output bytes one input byte can give: a zstd RLE block (4 bytes for 128 KiB), an LZ4
-match-length byte (255 more bytes). A declared size beyond it cannot be honest."""
+match-length byte (255 more bytes), bzip2's two run-length stages (tens of millions for a run
+of one byte). A declared size beyond it cannot be honest."""
 RATIO_SLACK = 128 * 1024
 """Output a few header bytes may give on their own (one zstd block, a short LZ4 frame)."""
 STEP = 16 * 1024 * 1024
@@ -45,10 +47,17 @@ class _Streaming(Protocol):
     def decompress(self, data: bytes, /, max_length: int = -1) -> bytes: ...
 
 
-_ERRORS: tuple[type[Exception], ...] = (zstd.ZstdError, RuntimeError, ValueError, EOFError)
+_ERRORS: tuple[type[Exception], ...] = (
+    zstd.ZstdError,
+    RuntimeError,
+    ValueError,
+    EOFError,
+    OSError,  # bz2: invalid data
+)
 _STREAMS: dict[str, Callable[[], _Streaming]] = {
     "zstd": zstd.ZstdDecompressor,
     "lz4": lz4.frame.LZ4FrameDecompressor,
+    "bz2": bz2.BZ2Decompressor,
 }
 
 
@@ -123,6 +132,8 @@ def _claimed_size(compression: str, frame: bytes) -> int | None:
     try:
         if compression == "zstd":
             return zstd.get_frame_info(frame).decompressed_size
+        if compression == "bz2":
+            return None  # a bzip2 stream does not state its size
         return int(lz4.frame.get_frame_info(frame)["content_size"]) or None  # 0: not stated
     except Exception:  # a damaged header: the decompressor says what is wrong
         return None

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import merge
+from medkit_replay.inputs.rosbag1 import open_bag1
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
@@ -28,6 +29,7 @@ READERS: dict[str, Opener] = {
     "dir": open_directory,
     ".mcap": open_file,
     ".db3": open_file,
+    ".bag": open_bag1,
     ".jsonl": open_script_input,
 }
 """Input openers by kind: ``dir`` for a directory, else the file's lower-cased suffix."""
@@ -141,7 +143,8 @@ def open_recording(
     """Open inputs to be read as one recording.
 
     Args:
-        paths: rosbag2 directories, ``.mcap`` or ``.db3`` files (any kind READERS knows).
+        paths: rosbag2 directories, ``.mcap`` or ``.db3`` files, ROS 1 ``.bag`` files (any kind
+            READERS knows).
         rosout: also read ``/rosout`` (for the log bridge).
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).

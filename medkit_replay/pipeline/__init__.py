@@ -61,7 +61,8 @@ def replay(
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
     Args:
-        inputs: rosbag2 directories, ``.mcap`` or ``.db3`` files, JSON-lines scripts.
+        inputs: rosbag2 directories, ``.mcap`` or ``.db3`` files, ROS 1 ``.bag`` files, JSON-lines
+            scripts.
         configs: ROS 2 parameter files, later ones overriding earlier ones key by key.
         progress: called with a :class:`Progress` at the start of each pass over the
             recording, every ``progress_every`` messages read, and once at its end

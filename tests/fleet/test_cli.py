@@ -176,11 +176,12 @@ def test_sample_bags_with_budget(tmp_path: Path, capsys: pytest.CaptureFixture[s
     rows = read_rows(tmp_path / "r" / "runs.csv")
     assert [(Path(r["path"]).name, r["budget"]) for r in rows] == [
         ("nav2_mission_mcap", "pass"),
+        ("nav2_mission_ros1.bag", "pass"),
         ("nav2_mission_sqlite3", "pass"),
         ("service_calls.mcap", "fail"),
     ]
-    assert "no e-stop, no battery fault" in rows[2]["budget_failures"]
-    assert "budget: 1 fail, 2 pass" in out
+    assert "no e-stop, no battery fault" in rows[3]["budget_failures"]
+    assert "budget: 1 fail, 3 pass" in out
     assert "over budget:" in out
 
 

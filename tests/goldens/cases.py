@@ -14,6 +14,7 @@ RECORDINGS = [
     "sample_bags/nav2_mission_mcap",
     "sample_bags/nav2_mission_sqlite3",
     "sample_bags/service_calls.mcap",
+    "sample_bags/nav2_mission_ros1.bag",
     "examples/nav2_mission.jsonl",
     *(
         f"tests/fixtures/rosbag2/{name}"

@@ -290,7 +290,7 @@ def test_input_errors_are_one_line_with_the_path(tmp_path: Path) -> None:
     cases = {
         tmp_path / "missing.mcap": "input not found",
         tmp_path / "notes.txt": (
-            "unsupported input (expected a rosbag2 directory or a .db3, .jsonl, .mcap file)"
+            "unsupported input (expected a rosbag2 directory or a .bag, .db3, .jsonl, .mcap file)"
         ),
         tmp_path / "empty": "no metadata.yaml and no .mcap or .db3 file in it",
         tmp_path / "junk.mcap": "not an MCAP file (bad magic)",

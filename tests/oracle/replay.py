@@ -19,6 +19,7 @@ from itertools import count
 from typing import TYPE_CHECKING
 
 from rosbags.interfaces import MessageDefinitionFormat
+from rosbags.rosbag1 import Reader as Reader1
 from rosbags.rosbag2 import Reader
 
 from medkit_replay.bridges.action_status import ActionStatusBridge
@@ -31,6 +32,7 @@ from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.inputs import Message, Selection, open_recording
+from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore
 from medkit_replay.inputs.typestore import _recorded_store
 from medkit_replay.model import ClearRequest, ReportRequest
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore, normalize_typename
@@ -220,6 +222,8 @@ def _rosbags_messages(path: Path, index: int, selection: Selection) -> list[Mess
     """Every selected message rosbags reads and decodes, or None if rosbags cannot read it."""
     if path.suffix == ".jsonl":
         return None
+    if path.suffix == ".bag":
+        return _rosbag1_messages(path, index, selection)
     decoders: dict[int, _RosbagsDecoder | None] = {}
     out: list[Message] = []
     try:
@@ -240,6 +244,31 @@ def _rosbags_messages(path: Path, index: int, selection: Selection) -> list[Mess
             if read != reader.message_count:  # read short without a word (seen on zstd chunks)
                 return None
     except Exception:  # rosbags cannot read it: the product's reader then
+        return None
+    return out
+
+
+def _rosbag1_messages(path: Path, index: int, selection: Selection) -> list[Message] | None:
+    """A ROS 1 bag as rosbags' rosbag1 Reader reads it (through its index, time-sorted) and its
+    ROS 1 deserializer decodes it; the three bridge types mapped by the product's conversions."""
+    store = ros1_typestore()
+    out: list[Message] = []
+    try:
+        with Reader1(path) as reader:
+            for connection, t_ns, raw in reader.messages():
+                ros1_type = normalize_typename(connection.msgtype)
+                translation = TRANSLATIONS.get(ros1_type)
+                topic, msgtype = connection.topic, ros1_type
+                if translation is not None:
+                    topic, msgtype = translation.topic(topic), translation.ros2_type
+                role, _ = selection.classify(topic, msgtype)
+                if role is None:
+                    continue
+                msg = store.deserialize_ros1(raw, ros1_type)
+                if translation is not None:
+                    msg = translation.convert(msg)
+                out.append(Message(t_ns, index, topic, msgtype, role, msg))
+    except Exception:  # rosbags cannot read it (unindexed, damaged): the product's reader then
         return None
     return out
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from medkit_replay.inputs.cdr import DiagnosticArrayView
+from medkit_replay.inputs.ros1_decoders import Ros1DiagnosticArrayView
 from medkit_replay.outputs.json_report import dumps
 from medkit_replay.pipeline import replay
 from tests.oracle.replay import ENGINE_SECTIONS, oracle_sections
@@ -33,7 +34,7 @@ def plain(value: object) -> object:
     rosbags' classes also carry their constants as fields; those are left out (the light
     records have them as class attributes).
     """
-    if isinstance(value, DiagnosticArrayView):  # header and status are built on demand
+    if isinstance(value, DiagnosticArrayView | Ros1DiagnosticArrayView):  # built on demand
         return {"header": plain(value.header), "status": plain(value.status)}
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {

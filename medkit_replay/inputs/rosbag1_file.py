@@ -1,0 +1,313 @@
+"""A ROS 1 bag file (format 2.0) read record by record: its bag header, index and chunks.
+
+Reads chunks in file order (an intact index only skips chunks and bounds time), so unindexed,
+truncated and damaged bags give what they hold; never writes, allocates within bounds.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, NamedTuple
+
+from medkit_replay.files import open_regular
+from medkit_replay.inputs import rosbag1_records as rec
+from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
+from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.rosbag1_records import RecordDamageError
+from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+    from pathlib import Path
+    from typing import IO
+
+INDEX_SIZE_LIMIT = 256 * 1024 * 1024
+"""Largest index section (connections and chunk infos) read into memory; larger is damage."""
+_CODECS = {"none": "", "bz2": "bz2", "lz4": "lz4"}
+
+
+class Raw1(NamedTuple):
+    """One stored message, not decoded: its connection id and payload."""
+
+    connection: int
+    data: bytes
+
+
+class Bag1File:
+    """One ROS 1 bag, probed when constructed (magic, bag header, index), scanned on demand.
+
+    After construction ``connections``, ``counts``, ``start_ns`` and ``end_ns`` hold what the
+    index declares (nothing without one); scanning completes them. ``orphans`` counts messages
+    whose connection record is lost.
+    """
+
+    def __init__(
+        self, path: Path, warn: Callable[[str], None], wants: Callable[[int], bool]
+    ) -> None:
+        """Open and probe the bag.
+
+        Args:
+            path: the ``.bag`` file.
+            warn: told each loss or oddity (without the path).
+            wants: whether a connection's messages are read; asked when first needed.
+
+        Raises:
+            NotABagError: the file is not a ROS 1 bag of format 2.0, or its bag header is
+                unreadable.
+            OSError: the file cannot be opened.
+        """
+        self.path = path
+        self.warn = warn
+        self._wants = wants
+        self._file: IO[bytes] | None = open_regular(path)
+        self._size = os.fstat(self._file.fileno()).st_size
+        self.connections: dict[int, rec.Ros1Connection] = {}
+        self.counts: dict[int, int] = {}
+        self.start_ns: int | None = None
+        self.end_ns: int | None = None
+        self.orphans = 0
+        self._chunks: dict[int, rec.ChunkInfo] = {}  # by position; empty without a usable index
+        try:
+            self._probe()
+        except BaseException:
+            self.close()
+            raise
+
+    def _read_at(self, pos: int, size: int) -> bytes:
+        assert self._file is not None
+        self._file.seek(pos)
+        return self._file.read(size)
+
+    def _probe(self) -> None:
+        if self._size == 0:
+            raise NotABagError("empty file, not a ROS 1 bag")
+        magic = self._read_at(0, len(rec.MAGIC))
+        if magic != rec.MAGIC:
+            if magic.startswith(b"#ROSBAG V"):
+                shown = magic.decode("ascii", "replace").strip()
+                raise NotABagError(f"ROS 1 bag of format {shown[9:]!r}; only 2.0 is read")
+            raise NotABagError("not a ROS 1 bag (bad magic)")
+        try:
+            fields, data_start, data_end = self._record_at(len(rec.MAGIC))
+            header = rec.bag_header(fields)
+        except (RecordDamageError, EOFError) as exc:
+            raise NotABagError(f"ROS 1 bag header record is damaged ({exc})") from None
+        encryptor = rec.string(fields, "encryptor", "")
+        if encryptor:
+            raise NotABagError(f"ROS 1 bag encrypted with {encryptor!r}; cannot be read")
+        self._data_start = data_end
+        self._data_end = self._size
+        del data_start
+        if header.index_pos == 0:
+            self.warn(
+                "not indexed (the recorder stopped before writing its index?); "
+                "its chunks are scanned"
+            )
+        elif not data_end <= header.index_pos < self._size:
+            self.warn(
+                f"index at byte {header.index_pos} is beyond the end of the file "
+                f"({self._size} bytes: truncated?); its chunks are scanned"
+            )
+        else:
+            self._data_end = header.index_pos
+            self._read_index(header)
+
+    def _record_at(self, pos: int) -> tuple[dict[str, bytes], int, int]:
+        """A top-level record's fields and where its data lies.
+
+        Raises:
+            EOFError: the file ends inside the record.
+            RecordDamageError: a length field beyond every bound, or a damaged header.
+        """
+        head = self._read_at(pos, 4)
+        if len(head) < 4:
+            raise EOFError("the file ends inside it")
+        header_len = int.from_bytes(head, "little")
+        if header_len > rec.HEADER_SIZE_LIMIT:
+            raise RecordDamageError(f"record header of {header_len} bytes")
+        if pos + 8 + header_len > self._size:
+            raise EOFError("the file ends inside it")
+        block = self._read_at(pos + 4, header_len + 4)
+        fields = rec.parse_fields(block[:header_len])
+        data_len = int.from_bytes(block[header_len:], "little")
+        start = pos + 8 + header_len
+        if data_len > RECORD_SIZE_LIMIT:
+            raise RecordDamageError(f"record data of {data_len} bytes")
+        if start + data_len > self._size:
+            raise EOFError("the file ends inside it")
+        return fields, start, start + data_len
+
+    def _read_index(self, header: rec.BagHeader) -> None:
+        """Connections and chunk infos from the index; a damaged index is set aside with a note."""
+        length = self._size - header.index_pos
+        if length > INDEX_SIZE_LIMIT:
+            self.warn(f"index of {length} bytes is implausible; its chunks are scanned")
+            return
+        chunks: list[rec.ChunkInfo] = []
+        connections = 0
+        try:
+            for op, fields, data in rec.index_records(self._read_at(header.index_pos, length)):
+                if op == rec.OP_CONNECTION:
+                    self._add_connection(rec.connection(fields, data))
+                    connections += 1
+                elif op == rec.OP_CHUNK_INFO:
+                    chunks.append(rec.chunk_info(fields, data))
+        except RecordDamageError as exc:
+            self.warn(f"index is damaged ({exc}); its chunks are scanned")
+            return
+        if (connections, len(chunks)) != (header.conn_count, header.chunk_count):
+            self.warn(
+                f"index holds {connections} connections and {len(chunks)} chunks, the bag "
+                f"header declares {header.conn_count} and {header.chunk_count}; "
+                "its chunks are scanned"
+            )
+            return
+        if any(not self._data_start <= c.chunk_pos < self._data_end for c in chunks):
+            self.warn("index points outside the bag's data; its chunks are scanned")
+            return
+        self._chunks = {c.chunk_pos: c for c in chunks}
+        for chunk in chunks:
+            for cid, count in chunk.counts.items():
+                self.counts[cid] = self.counts.get(cid, 0) + count
+            if chunk.counts:
+                self._span(chunk.start_ns)
+                self._span(chunk.end_ns)
+
+    def _span(self, t_ns: int) -> None:
+        self.start_ns = t_ns if self.start_ns is None else min(self.start_ns, t_ns)
+        self.end_ns = t_ns if self.end_ns is None else max(self.end_ns, t_ns)
+
+    def _add_connection(self, connection: rec.Ros1Connection) -> None:
+        if connection.id not in self.connections:
+            self.connections[connection.id] = connection
+
+    def scan(self) -> Iterator[Bound | list[Timed[Raw1]]]:
+        """Every chunk in file order: bounds and the wanted messages of each, sorted by
+        (log time, position); a position is (chunk's byte offset, record's offset in it)."""
+        positions = sorted(self._chunks)
+        floors: dict[int, int] = {}  # earliest start of this chunk and every later one
+        floor: int | None = None
+        for pos in reversed(positions):
+            info = self._chunks[pos]
+            if info.counts:
+                floor = info.start_ns if floor is None else min(floor, info.start_ns)
+            if floor is not None:
+                floors[pos] = floor
+        pos = self._data_start
+        while pos < self._data_end:
+            try:
+                fields, start, end = self._record_at(pos)
+                op = rec.op_of(fields)
+                if op == rec.OP_CHUNK:
+                    compression = rec.string(fields, "compression")
+                    size = rec.uint32(fields, "size")
+                elif op == rec.OP_CONNECTION:
+                    self._add_connection(rec.connection(fields, self._read_at(start, end - start)))
+            except EOFError:
+                self.warn(
+                    f"file ends inside a record at byte {pos} of {self._size} (truncated: "
+                    f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost"
+                )
+                yield from self._cut_chunk(pos)
+                return
+            except RecordDamageError as exc:
+                later = [p for p in positions if p > pos]
+                if later:
+                    self.warn(f"damaged record at byte {pos} ({exc}); resumed at byte {later[0]}")
+                    pos = later[0]
+                    continue
+                self.warn(
+                    f"damaged record at byte {pos} ({exc}); the last {self._data_end - pos} "
+                    "bytes are not read"
+                )
+                return
+            if op == rec.OP_CHUNK:
+                if pos in floors:
+                    yield Bound(floors[pos])
+                if self._needed(pos):
+                    batch = self._chunk(pos, compression, size, start, end)
+                    if batch:
+                        if pos not in floors:
+                            yield Bound(batch[0].t_ns)
+                        yield batch
+            pos = end
+
+    def _needed(self, pos: int) -> bool:
+        """Whether a chunk may hold a wanted message (all do, without an index)."""
+        info = self._chunks.get(pos)
+        if info is None:
+            return True
+        return any(cid not in self.connections or self._wants(cid) for cid in info.counts)
+
+    def _cut_chunk(self, pos: int) -> Iterator[Bound | list[Timed[Raw1]]]:
+        """The intact messages of an uncompressed chunk the end of the file cuts off."""
+        head = self._read_at(pos, 4)
+        header_len = int.from_bytes(head, "little") if len(head) == 4 else 0
+        if not 0 < header_len <= min(rec.HEADER_SIZE_LIMIT, self._size - pos - 8):
+            return
+        try:
+            fields = rec.parse_fields(self._read_at(pos + 4, header_len))
+            if rec.op_of(fields) != rec.OP_CHUNK or rec.string(fields, "compression") != "none":
+                return
+        except RecordDamageError:
+            return
+        start = pos + 8 + header_len
+        records = memoryview(self._read_at(start, self._size - start))
+        batch = self._messages_of(f"chunk at byte {pos} (cut off)", pos, records)
+        if batch:
+            yield Bound(batch[0].t_ns)
+            yield batch
+
+    def _chunk(
+        self, pos: int, compression: str, size: int, start: int, end: int
+    ) -> list[Timed[Raw1]]:
+        """One chunk's wanted messages, sorted by (log time, position)."""
+        where = f"chunk at byte {pos}"
+        codec = _CODECS.get(compression)
+        if codec is None:
+            self.warn(f"{where}: compression {compression!r} is not supported; it is lost")
+            return []
+        if size > RECORD_SIZE_LIMIT:
+            self.warn(f"{where} claims {size} bytes uncompressed; skipped as damaged")
+            return []
+        try:
+            compressed = self._read_at(start, end - start)
+            records = memoryview(decompress_chunk(compressed, codec, size, 0))
+        except ChunkDamageError as exc:
+            self.warn(f"{where} cannot be decompressed: {exc}; its messages are lost")
+            return []
+        return self._messages_of(where, pos, records)
+
+    def _messages_of(self, where: str, pos: int, records: memoryview) -> list[Timed[Raw1]]:
+        """The wanted messages of a chunk's records, sorted; connection records are learnt."""
+        counted = pos in self._chunks
+        batch: list[Timed[Raw1]] = []
+        kept = 0
+        try:
+            for record in rec.chunk_records(records):
+                if record.op == rec.OP_CONNECTION:
+                    data = records[record.data_start : record.data_end]
+                    self._add_connection(rec.connection(record.fields, data))
+                elif record.op == rec.OP_MSG_DATA:
+                    cid = rec.uint32(record.fields, "conn")
+                    t_ns = rec.time_ns(record.fields, "time")
+                    kept += 1
+                    if not counted:
+                        self.counts[cid] = self.counts.get(cid, 0) + 1
+                        self._span(t_ns)
+                    if cid not in self.connections:
+                        self.orphans += 1
+                        continue
+                    if self._wants(cid):
+                        payload = bytes(records[record.data_start : record.data_end])
+                        batch.append(Timed(t_ns, (pos, record.data_start), Raw1(cid, payload)))
+        except RecordDamageError as exc:
+            self.warn(f"{where}: {exc}; kept the {kept} messages before it")
+        batch.sort(key=lambda timed: (timed.t_ns, timed.position))
+        return batch
+
+    def close(self) -> None:
+        """Close the file; safe to call twice."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
