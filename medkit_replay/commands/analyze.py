@@ -78,9 +78,7 @@ def analyze(
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
-    from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
     from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
-    from medkit_replay.outputs.terminal import print_summary  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
@@ -89,7 +87,11 @@ def analyze(
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
     refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
-    bar = progress_bar(sys.stderr, quiet=quiet)
+    bar = None
+    if not quiet:  # rich (bar and summary) is loaded only for people to read
+        from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+
+        bar = progress_bar(sys.stderr)
     with bar if bar is not None else nullcontext():
         result = replay(list(inputs), list(configs), progress=bar)
     if json_out == "-":
@@ -110,6 +112,8 @@ def analyze(
                 f"cannot write {output.label}: {err.strerror or err}", path=str(target)
             ) from None
     if not quiet:
+        from medkit_replay.outputs.terminal import print_summary  # noqa: PLC0415
+
         if json_out == "-":
             print_summary(result, sys.stderr)
         else:
