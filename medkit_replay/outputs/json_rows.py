@@ -12,7 +12,17 @@ import re
 import types
 from dataclasses import fields, is_dataclass
 from itertools import islice, starmap
-from typing import TYPE_CHECKING, Any, Literal, Union, cast, get_args, get_origin, get_type_hints
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Literal,
+    TypeGuard,
+    Union,
+    cast,
+    get_args,
+    get_origin,
+    get_type_hints,
+)
 
 import msgspec
 
@@ -51,11 +61,22 @@ def _bulk_safe(hint: object) -> bool:
         return all(_bulk_safe(arg) for arg in get_args(hint))
     if origin is tuple:
         args = get_args(hint)
-        return len(args) == 2 and args[1] is Ellipsis and _bulk_safe(args[0])
-    if isinstance(hint, type) and is_dataclass(hint):
+        if len(args) != 2 or args[1] is not Ellipsis or not _bulk_safe(args[0]):
+            return False
+        # Records or no records: an array mixing them with strings could hold the boundary.
+        return _is_record(args[0]) or not _holds_record(args[0])
+    if _is_record(hint):
         hints = get_type_hints(hint)
         return all(_bulk_safe(hints[f.name]) for f in fields(hint))
     return False
+
+
+def _is_record(hint: object) -> TypeGuard[type[Any]]:
+    return isinstance(hint, type) and is_dataclass(hint)
+
+
+def _holds_record(hint: object) -> bool:
+    return _is_record(hint) or any(_holds_record(arg) for arg in get_args(hint))
 
 
 def _struct(cls: type[Any]) -> type[msgspec.Struct]:
