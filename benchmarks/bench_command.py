@@ -81,6 +81,7 @@ def timed(command: list[str], repeat: int) -> Run:
             text=True,
             check=False,
             env=ENV,
+            cwd=ROOT,  # python -c puts the working directory first on the path: this checkout
         )
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
