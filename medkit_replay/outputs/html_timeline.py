@@ -184,33 +184,31 @@ class _Markers:
     ones (confirmed, cleared, ClearFault) are each drawn where they happened."""
 
     span: Span
-    exact: dict[str, list[_PendingMarker]] = field(default_factory=dict)
+    exact: list[_PendingMarker] = field(default_factory=list)  # in the order added
     binned: dict[tuple[int, int], tuple[_PendingMarker, int]] = field(default_factory=dict)
+    per_kind: Counter[str] = field(default_factory=Counter)
     count: int = 0
 
     def add(self, t_ns: int, kind: str, row: Row) -> None:
         self.count += 1
-        exact = self.exact.setdefault(kind, [])
-        if len(exact) < MARKER_CAP:
-            exact.append((t_ns, kind, row))
+        self.per_kind[kind] += 1
+        if self.per_kind[kind] <= MARKER_CAP:
+            self.exact.append((t_ns, kind, row))
         key = (self.span.bin(t_ns, MARKER_BINS), MARKER_ORDER.get(kind, 9))
         first, seen = self.binned.get(key, ((t_ns, kind, row), 0))
         self.binned[key] = (first, seen + 1)
 
     def result(self, tip: Callable[[_PendingMarker], str]) -> list[Marker]:
-        dense = {kind for kind, kept in self.exact.items() if len(kept) >= MARKER_CAP}
+        dense = {kind for kind, count in self.per_kind.items() if count > MARKER_CAP}
         markers = [
-            Marker(item[0], item[1], tip(item))
-            for kind, kept in self.exact.items()
-            if kind not in dense
-            for item in kept
+            Marker(item[0], item[1], tip(item)) for item in self.exact if item[1] not in dense
         ]
-        per_kind = Counter(kind for kind, kept in self.exact.items() for _ in kept)
+        if not dense:
+            return markers
         for (_, _), (first, seen) in sorted(self.binned.items()):
-            if first[1] not in dense or per_kind[first[1]] < MARKER_CAP:
-                continue
-            extra = f"\n(+{seen - 1} more of this kind nearby: downsampled)" if seen > 1 else ""
-            markers.append(Marker(first[0], first[1], tip(first) + extra))
+            if first[1] in dense:
+                extra = f"\n(+{seen - 1} more of this kind nearby: downsampled)" if seen > 1 else ""
+                markers.append(Marker(first[0], first[1], tip(first) + extra))
         return sorted(markers, key=lambda m: (m.t_ns, MARKER_ORDER.get(m.kind, 9)))
 
 
