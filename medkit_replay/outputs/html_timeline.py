@@ -228,11 +228,12 @@ class _Trace:
     last_status: int | None = None
     count: int = 0
 
-    def add(self, point: _RawPoint) -> None:
+    def add(self, point: _RawPoint, key: int) -> None:
+        """One point, in time bin ``key`` of TRACE_BINS (``Span.bin``, worked out by the caller
+        with the arithmetic inlined: this runs once per report)."""
         self.count += 1
         if self.count <= TRACE_CAP:
             self.exact.append(point)
-        key = self.span.bin(point[0], TRACE_BINS)
         item = (self.count, point)
         low, high = self.binned.get(key, (item, item))
         if point[1] < low[1][1] or point[1] > high[1][1] or low is item:
@@ -380,6 +381,7 @@ def _traces(result: Result, span: Span, traces: dict[str, _Trace]) -> None:
         "status",
     )
     status_index = STATUS_INDEX.get
+    start, duration, last_bin = span.start_ns, span.duration_ns, TRACE_BINS - 1
     for batch in row_batches(result.reports, REPORT_ROWS):
         for row in batch:
             trace = traces.get(row[code_at])
@@ -388,8 +390,12 @@ def _traces(result: Result, span: Span, traces: dict[str, _Trace]) -> None:
             counter, conf, heal = row[counter_at], row[conf_at], row[heal_at]
             if counter is None or conf is None or heal is None:
                 continue
+            t_ns = row[t_at]
+            key = (t_ns - start) * TRACE_BINS // duration  # Span.bin, inlined
+            key = 0 if key < 0 else last_bin if key > last_bin else key
             passed = 1 if row[event_at] == "PASSED" else 0
-            trace.add((row[t_at], counter, conf, heal, passed, status_index(row[status_at], -1)))
+            point = (t_ns, counter, conf, heal, passed, status_index(row[status_at], -1))
+            trace.add(point, key)
 
 
 def _marker_tip(span: Span) -> Callable[[_PendingMarker], str]:
