@@ -63,7 +63,7 @@ _TOO_BIG = "a report of {:,} bytes is too large to load in the memory available"
 _MAYBE_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
 
 
-def report_bytes(path: Path) -> bytes:
+def report_bytes(path: Path) -> bytes | bytearray:
     """The report file's text as bytes, decompressed if it is gzip or zstd (by its first bytes):
     a regular file within the bound, refused at once when it cannot be a report (it does not
     start with '{'), so a huge or endless file is never read whole. Decompressed, it gets the
@@ -137,7 +137,7 @@ def _pieces(stream: IO[bytes], compression: str) -> Iterator[bytes]:
         raise EOFError("the zstd frame is cut short")
 
 
-def _decompressed(stream: IO[bytes], path: Path, compression: str) -> bytes:
+def _decompressed(stream: IO[bytes], path: Path, compression: str) -> bytearray:
     """A compressed report's text, read a piece at a time and refused as soon as it passes
     MAX_REPORT_FILE_BYTES or shows it is no report."""
     # gzip.BadGzipFile is an OSError; a cut stream ends in EOFError.
@@ -168,7 +168,7 @@ def _decompressed(stream: IO[bytes], path: Path, compression: str) -> bytes:
         ) from None
     except MemoryError:
         raise InputError(_TOO_BIG.format(len(data)), path=str(path)) from None
-    return bytes(data)
+    return data  # a bytearray: no second copy of a large report
 
 
 def _why(err: BaseException) -> str:
