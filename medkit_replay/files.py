@@ -99,3 +99,12 @@ def read_limited(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> bytes:
 def read_limited_text(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> str:
     """``read_limited`` decoded as UTF-8 (UnicodeDecodeError when it is not)."""
     return read_limited(path, limit).decode("utf-8")
+
+
+REPORT_COMPRESSIONS = {".gz": "gzip", ".zst": "zstd"}
+"""A JSON report's file-name suffix and the compression it stands for."""
+
+
+def report_compression(path: Path | str) -> str | None:
+    """How a report file is compressed, by its name: ``gzip``, ``zstd`` or None (plain)."""
+    return REPORT_COMPRESSIONS.get(Path(path).suffix.lower())

@@ -66,6 +66,11 @@ class Spool(Sequence[T], Generic[T]):
         self._file: IO[bytes] | None = None
         self._cache: tuple[int, list[object]] | None = None
 
+    @property
+    def codec(self) -> RowCodec[T] | None:
+        """How records are kept as rows (None: kept as records)."""
+        return self._codec
+
     def append(self, item: T) -> None:
         """Add a record at the end."""
         self._tail.append(item)
@@ -144,6 +149,17 @@ class Spool(Sequence[T], Generic[T]):
                 yield item if type(item) is tuple else codec.encode(item)  # type: ignore[arg-type]
         for item in self._tail:
             yield item if type(item) is tuple else codec.encode(item)  # type: ignore[arg-type]
+
+    def row_batches(self) -> Iterator[list[Row]]:
+        """The records in their row form, in order, a chunk at a time (only with a codec)."""
+        codec = self._codec
+        assert codec is not None
+        for index in range(len(self._chunks) + 1):
+            items = self._chunk(index) if index < len(self._chunks) else self._tail
+            if set(map(type, items)) - {tuple}:  # some were read back as records
+                items = [x if type(x) is tuple else codec.encode(x) for x in items]  # type: ignore[arg-type]
+            if items:
+                yield items  # type: ignore[misc]  # rows only now
 
     def __len__(self) -> int:
         return self._spilled + len(self._tail)

@@ -63,6 +63,64 @@ def test_bridges_do_not_import_outputs_or_inputs() -> None:
     assert bad == []
 
 
+# -- start-up: what a command that only prints loads --------------------------------------
+
+HEAVY_AT_START = (
+    "pandas",
+    "pyarrow",
+    "dask",
+    "distributed",
+    "numpy",
+    "rosbags",
+    "mcap",
+    "yaml",
+    "rich",
+    "msgspec",
+    "zstandard",
+    "medkit_replay.pipeline",
+    "medkit_replay.inputs",
+    "medkit_replay.engine",
+    "medkit_replay.bridges",
+    "medkit_replay.config",
+    "medkit_replay.checks",
+    "medkit_replay.diffing",
+    "medkit_replay.fleet",
+    "medkit_replay.outputs.html",
+    "medkit_replay.outputs.mcap_events",
+    "medkit_replay.outputs.json_report",
+    "medkit_replay.outputs.tables",
+    "medkit_replay.outputs.terminal",
+    "medkit_replay.outputs.progress",
+)
+"""Loaded only when a command runs: none of it is needed to print a version or a help text."""
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["--version"],
+        ["--help"],
+        ["analyze", "--help"],
+        ["check", "--help"],
+        ["diff", "--help"],
+        ["fleet", "--help"],
+    ],
+)
+def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
+    """The console script's path, in a fresh interpreter; modules listed once it is done."""
+    code = (
+        "import json, sys\n"
+        "from medkit_replay.cli import main\n"
+        f"status = main({arguments!r})\n"
+        "sys.stderr.write(json.dumps([status, sorted(sys.modules)]))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    status, loaded = json.loads(done.stderr)
+    assert status == 0
+    assert done.stdout.strip()  # it printed its version or help
+    assert sorted(m for m in loaded if m.startswith(HEAVY_AT_START)) == []
+
+
 # -- the declared import table ------------------------------------------------------------
 
 PACKAGE = Path(__file__).resolve().parents[1] / "medkit_replay"
@@ -90,7 +148,7 @@ ALLOWED: dict[str, set[str]] = {
     | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace"},
     # explaining reads a Result and the FaultTrace the replay filled; it draws through outputs.
     "explaining": NEUTRAL | {"result", "trace", "outputs"},
-    "outputs": NEUTRAL | {"result", "files", "msgdefs"},
+    "outputs": NEUTRAL | {"result", "files", "msgdefs", "spool"},
     "msgdefs": NEUTRAL,
     "checks": NEUTRAL | {"result", "files", "yaml_bounds", "outputs"},
     # diffing.render draws through outputs.console; compare and align import neither.

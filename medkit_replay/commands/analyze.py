@@ -13,14 +13,8 @@ import click
 
 from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
-from medkit_replay.outputs.atomic import atomic_text, refuse_overlap
-from medkit_replay.outputs.json_report import write_json
-from medkit_replay.outputs.progress import progress_bar
-from medkit_replay.outputs.terminal import print_summary
-from medkit_replay.pipeline import replay
 
 
 @click.command()
@@ -31,7 +25,7 @@ from medkit_replay.pipeline import replay
     "json_out",
     type=str,
     default=None,
-    help="Write the JSON report here ('-' for standard output).",
+    help="Write the JSON report here ('-' for standard output; FILE.gz or FILE.zst compressed).",
 )
 @click.option(
     "--csv",
@@ -81,22 +75,31 @@ def analyze(
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
+    # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
+    from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
+    from medkit_replay.pipeline import replay  # noqa: PLC0415
+
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
     chosen = [
         (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
     refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
-    bar = progress_bar(sys.stderr, quiet=quiet)
+    bar = None
+    if not quiet:  # rich (bar and summary) is loaded only for people to read
+        from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+
+        bar = progress_bar(sys.stderr)
     with bar if bar is not None else nullcontext():
         result = replay(list(inputs), list(configs), progress=bar)
     if json_out == "-":
         with standard_output("the report"):
-            write_json(result, sys.stdout)
+            write_report_stdout(result)
     elif json_out is not None:
         try:
-            with atomic_text(Path(json_out)) as stream:
-                write_json(result, stream)
+            write_report(result, Path(json_out))
         except OSError as err:
             raise MedkitReplayError(
                 f"cannot write report: {err.strerror or err}", path=json_out
@@ -109,6 +112,8 @@ def analyze(
                 f"cannot write {output.label}: {err.strerror or err}", path=str(target)
             ) from None
     if not quiet:
+        from medkit_replay.outputs.terminal import print_summary  # noqa: PLC0415
+
         if json_out == "-":
             print_summary(result, sys.stderr)
         else:

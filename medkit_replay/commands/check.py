@@ -15,22 +15,14 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.checks.budget_file import load_budget
-from medkit_replay.checks.evaluate import CheckRun, check_run, unreadable_run
-from medkit_replay.checks.github import step_summary, workflow_commands
-from medkit_replay.checks.junit import write_junit
-from medkit_replay.checks.terminal import print_conclusion, print_run
 from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
-from medkit_replay.outputs.atomic import refuse_overlap
-from medkit_replay.outputs.progress import progress_bar
-from medkit_replay.pipeline import replay
 
 if TYPE_CHECKING:
     from medkit_replay.checks.budget import Budget
+    from medkit_replay.checks.evaluate import CheckRun
 
 SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
 
@@ -83,6 +75,13 @@ def check(
       medkit-replay check mission/ --budget budget.yaml --config robot_params.yaml
       medkit-replay check runs/*.mcap --budget budget.yaml --junit budget.xml --github
     """
+    # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.checks.budget_file import load_budget  # noqa: PLC0415
+    from medkit_replay.checks.junit import write_junit  # noqa: PLC0415
+    from medkit_replay.checks.terminal import print_conclusion, print_run  # noqa: PLC0415
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
+
     budget = load_budget(budget_path)  # a bad budget fails before any replay
     protected = config_files(configs)  # so does a bad config
     for path in inputs:
@@ -118,6 +117,10 @@ def check(
 def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -> CheckRun:
     """Replay one run and check it; a recording that cannot be read is a failed run saying why
     (a config problem is still the whole command's, exit 2)."""
+    from medkit_replay.checks.evaluate import check_run, unreadable_run  # noqa: PLC0415
+    from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+    from medkit_replay.pipeline import replay  # noqa: PLC0415
+
     labels = [str(path) for path in group]
     try:
         for path in group:
@@ -140,6 +143,8 @@ def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -
 
 
 def _github(runs: list[CheckRun]) -> None:
+    from medkit_replay.checks.github import step_summary, workflow_commands  # noqa: PLC0415
+
     with standard_output("the GitHub annotations"):
         for command in workflow_commands(runs):
             sys.stdout.write(command + "\n")

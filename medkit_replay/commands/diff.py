@@ -6,7 +6,6 @@ its human and JSON output, rewrites the baseline on ``--update``.
 
 from __future__ import annotations
 
-import io
 import json
 import shutil
 import sys
@@ -15,34 +14,35 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
 import click
-from rich.console import Console
-from rich.text import Text
 
 from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.config.referenced import config_files
-from medkit_replay.diffing import diff_renderable, diff_reports, read_report, tolerance_ns
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.files import open_regular
-from medkit_replay.outputs.atomic import atomic_binary, refuse_overlap, write_text_atomic
-from medkit_replay.outputs.json_report import to_report, write_json
-from medkit_replay.outputs.progress import progress_bar
-from medkit_replay.pipeline import replay
+from medkit_replay.files import REPORT_COMPRESSIONS, open_regular
 
 if TYPE_CHECKING:
     from medkit_replay.diffing import ReportDiff
     from medkit_replay.result import Result
 
 
+REPORT_SUFFIXES = (".json", *(f".json{suffix}" for suffix in REPORT_COMPRESSIONS))
+
+
 def is_report_path(path: Path) -> bool:
-    """A ``.json`` file is read as a report; anything else is a recording or script to replay."""
-    return path.suffix.lower() == ".json"
+    """A ``.json`` file (or ``.json.gz``, ``.json.zst``) is read as a report; anything else is a
+    recording or script to replay."""
+    return path.name.lower().endswith(REPORT_SUFFIXES)
 
 
 class _Side:
     """One side of the diff: a report read from a file, or a recording replayed now."""
 
     def __init__(self, path: Path, configs: tuple[Path, ...], *, quiet: bool) -> None:
+        from medkit_replay.diffing import read_report  # noqa: PLC0415
+        from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
+        from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+        from medkit_replay.pipeline import replay  # noqa: PLC0415
+
         self.path = path
         self.result: Result | None = None
         if is_report_path(path):
@@ -59,20 +59,26 @@ class _Side:
 
 
 def _write_baseline(baseline: Path, current: _Side) -> None:
-    """Replace the baseline with the current report, atomically (a crash leaves the old one);
-    the baseline keeps its permission bits."""
+    """Replace the baseline with the current report, atomically (a crash leaves the old one),
+    compressed as the baseline's name says; the baseline keeps its permission bits."""
+    from medkit_replay.diffing.reports import report_bytes  # noqa: PLC0415
+    from medkit_replay.files import report_compression  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import atomic_binary  # noqa: PLC0415
+    from medkit_replay.outputs.json_report import write_json_bytes  # noqa: PLC0415
+    from medkit_replay.outputs.report_file import compressed  # noqa: PLC0415
+
     try:
         with atomic_binary(baseline) as raw:
             if current.result is not None:
-                stream = io.TextIOWrapper(raw, encoding="utf-8", newline="\n")
-                try:
-                    write_json(current.result, stream)
-                    stream.flush()
-                finally:
-                    stream.detach()
-            else:  # a report file: its bytes as they are
-                with open_regular(current.path) as source:
+                with compressed(raw, report_compression(baseline)) as stream:
+                    write_json_bytes(current.result, stream)
+            elif report_compression(current.path) == report_compression(baseline):
+                with open_regular(current.path) as source:  # its bytes as they are
                     shutil.copyfileobj(source, raw)
+            else:
+                text = report_bytes(current.path)
+                with compressed(raw, report_compression(baseline)) as stream:
+                    stream.write(text)
     except OSError as err:
         raise MedkitReplayError(
             f"cannot update the baseline: {err.strerror or err}", path=str(baseline)
@@ -80,6 +86,11 @@ def _write_baseline(baseline: Path, current: _Side) -> None:
 
 
 def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
+    from rich.console import Console  # noqa: PLC0415
+    from rich.text import Text  # noqa: PLC0415
+
+    from medkit_replay.diffing import diff_renderable  # noqa: PLC0415
+
     console = Console(file=stream, markup=False, emoji=False, highlight=False)
     renderable = diff_renderable(diff)
     if console.is_terminal:
@@ -141,6 +152,11 @@ def diff(
       medkit-replay diff baseline.json mission/ --config robot_params.yaml --time-tolerance 0.5
       medkit-replay diff baseline.json mission/ --config robot_params.yaml --update
     """
+    # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.diffing import diff_reports, tolerance_ns  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap, write_text_atomic  # noqa: PLC0415
+
     tolerance = tolerance_ns(time_tolerance)
     if json_out is not None and json_out != "-":
         refuse_overlap(

@@ -17,12 +17,7 @@ import click
 
 from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import InputError, MedkitReplayError
-from medkit_replay.fleet.cluster import dask_client_type, run_on_dask
-from medkit_replay.fleet.discover import discover
-from medkit_replay.fleet.workers import run_all
-from medkit_replay.outputs.atomic import refuse_overlap
 
 DEFAULT_OUT = Path("fleet-report")
 MAX_TIMEOUT = 10**9
@@ -99,6 +94,13 @@ def fleet(
       medkit-replay fleet missions/ --jobs 8 --timeout 600 --quiet
       medkit-replay fleet /shared/missions --dask tcp://scheduler:8786
     """
+    # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.fleet.cluster import dask_client_type, run_on_dask  # noqa: PLC0415
+    from medkit_replay.fleet.discover import discover  # noqa: PLC0415
+    from medkit_replay.fleet.workers import run_all  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
+
     if dask_address is not None and jobs is not None:
         raise click.UsageError("--jobs and --dask cannot be used together")
     if dask_address is not None:

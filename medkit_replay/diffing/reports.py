@@ -5,17 +5,20 @@ The only diffing module that touches a file: one refusal, one line, naming the f
 
 from __future__ import annotations
 
+import gzip
 import json
 import os
 import re
 import sys
-from typing import TYPE_CHECKING
+import zlib
+from typing import IO, TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import MAX_REPORT_FILE_BYTES, FileRefusedError, open_regular
 from medkit_replay.inputs.jsonl import JsonRefusedError, loads_strict, locate_refusal
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
     from pathlib import Path
 
 
@@ -26,7 +29,7 @@ def read_report(path: Path) -> dict[str, object]:
     (no NaN or Infinity, no number too long, no lone surrogate); each refusal is one line.
     """
     shown = str(path)
-    data = _report_bytes(path)
+    data = report_bytes(path)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
@@ -60,11 +63,19 @@ _TOO_BIG = "a report of {:,} bytes is too large to load in the memory available"
 _MAYBE_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
 
 
-def _report_bytes(path: Path) -> bytes:
-    """The file's bytes: a regular file within the bound, refused at once when it cannot be
-    a report (it does not start with '{'), so a huge or endless file is never read whole."""
+def report_bytes(path: Path) -> bytes | bytearray:
+    """The report file's text as bytes, decompressed if it is gzip or zstd (by its first bytes):
+    a regular file within the bound, refused at once when it cannot be a report (it does not
+    start with '{'), so a huge or endless file is never read whole. Decompressed, it gets the
+    same bound, checked as it expands: a decompression bomb is refused, never held."""
     try:
         with open_regular(path) as stream:
+            magic = stream.read(len(_ZSTD_MAGIC))
+            stream.seek(0)
+            if magic.startswith(_GZIP_MAGIC) or magic == _ZSTD_MAGIC:
+                return _decompressed(
+                    stream, path, "gzip" if magic.startswith(_GZIP_MAGIC) else "zstd"
+                )
             size = os.fstat(stream.fileno()).st_size
             if size > MAX_REPORT_FILE_BYTES:
                 raise InputError(
@@ -99,3 +110,66 @@ def _report_bytes(path: Path) -> bytes:
 
 
 _HEAD_BYTES = 64 * 1024
+
+
+_GZIP_MAGIC = b"\x1f\x8b"
+_ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
+_PIECE = 1024 * 1024
+# Compressed bytes fed to zstd at a time: what one feed can expand to stays some tens of MB.
+_ZSTD_FEED = 1024
+
+
+def _pieces(stream: IO[bytes], compression: str) -> Iterator[bytes]:
+    """The decompressed text a piece at a time; a cut or damaged stream raises."""
+    if compression == "gzip":
+        reader = gzip.GzipFile(fileobj=stream, mode="rb")  # a cut stream ends in EOFError
+        while piece := reader.read(_PIECE):
+            yield piece
+        return
+    import zstandard  # noqa: PLC0415  # only for zstd reports
+
+    decompressor = zstandard.ZstdDecompressor().decompressobj()
+    while fed := stream.read(_ZSTD_FEED):
+        if decompressor.eof:
+            raise EOFError("data after the end of the zstd frame")
+        yield decompressor.decompress(fed)
+    if not decompressor.eof:
+        raise EOFError("the zstd frame is cut short")
+
+
+def _decompressed(stream: IO[bytes], path: Path, compression: str) -> bytearray:
+    """A compressed report's text, read a piece at a time and refused as soon as it passes
+    MAX_REPORT_FILE_BYTES or shows it is no report."""
+    # gzip.BadGzipFile is an OSError; a cut stream ends in EOFError.
+    failures: tuple[type[BaseException], ...] = (OSError, EOFError, zlib.error)
+    if compression == "zstd":
+        import zstandard  # noqa: PLC0415  # only for zstd reports
+
+        failures = (*failures, zstandard.ZstdError)
+    data = bytearray()
+    try:
+        for piece in _pieces(stream, compression):
+            if not data and piece.lstrip(b" \t\r\n")[:1] not in (b"{", b""):
+                raise InputError(
+                    f"not a JSON report (its {compression} content does not start with '{{')",
+                    path=str(path),
+                    line=1,
+                )
+            data += piece
+            if len(data) > MAX_REPORT_FILE_BYTES:
+                raise InputError(
+                    f"a {compression} report that expands past {MAX_REPORT_FILE_BYTES:,} bytes "
+                    "(refused: a report is never that large)",
+                    path=str(path),
+                )
+    except failures as err:
+        raise InputError(
+            f"cannot decompress the {compression} report: {_why(err)}", path=str(path)
+        ) from None
+    except MemoryError:
+        raise InputError(_TOO_BIG.format(len(data)), path=str(path)) from None
+    return data  # a bytearray: no second copy of a large report
+
+
+def _why(err: BaseException) -> str:
+    return " ".join(str(err).split()) or type(err).__name__

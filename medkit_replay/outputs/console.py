@@ -9,10 +9,8 @@ import io
 import sys
 from typing import TYPE_CHECKING, TextIO
 
-from rich.console import Console
-
 if TYPE_CHECKING:
-    from rich.console import RenderableType
+    from rich.console import Console, RenderableType
 
 DEFAULT_WIDTH = 80
 """Columns used when the detected width is unusable (``COLUMNS=0``)."""
@@ -35,6 +33,8 @@ def literal_console(
     """A console with no markup, emoji or highlighting of plain strings, so that recorded text
     prints as it is; terminal, colour and width detected unless given (a detected width that is
     not usable becomes one that is: see :func:`usable_width`)."""
+    from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn
+
     console = Console(
         file=stream,
         width=width,
@@ -50,6 +50,8 @@ def literal_console(
 
 def plain_text(renderable: RenderableType, width: int, *, crop: bool = True) -> str:
     """``renderable`` as plain text (no ANSI codes) laid out for ``width`` columns."""
+    from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn
+
     buffer = io.StringIO()
     console = Console(
         file=buffer,

@@ -7,23 +7,27 @@ Recorded text in tooltips and in the page's data is cut at TEXT_CAP characters a
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from medkit_replay.model import NS_PER_SEC
+from medkit_replay.model import CLEAR_ROWS, EVENT_ROWS, NS_PER_SEC, REPORT_ROWS, TRANSITION_ROWS
+from medkit_replay.outputs.record_rows import Row, row_batches
 from medkit_replay.result import STATUSES
 from medkit_replay.text import clip, seconds, severity_name, xml_text
 
 if TYPE_CHECKING:
-    from medkit_replay.model import FaultSnapshot, NearMiss
+    from collections.abc import Callable
+
+    from medkit_replay.model import FaultSnapshot, NearMiss, RecordRows
     from medkit_replay.result import Result
 
 ROW_CAP = 1000  # timeline rows; beyond it the most serious faults are kept
 BAND_CAP = 200  # status periods per fault drawn exactly; beyond it, BAND_BINS time bins
 BAND_BINS = 400
-MARKER_CAP = 200  # event and clear markers per fault drawn exactly; beyond it, one per bin and kind
+MARKER_CAP = 200  # markers of one kind per fault drawn exactly; beyond it, one per bin
 MARKER_BINS = 200
-TRACE_CAP = 1000  # counter-trace points per fault; beyond it, min and max per bin
+TRACE_CAP = 1000  # counter-trace points per fault; beyond it, min, max and changes per bin
 TRACE_BINS = 500
 NEAR_CAP = 200  # near misses listed per fault
 TEXT_CAP = 200  # characters of one recorded text in a tooltip or the page's data
@@ -37,6 +41,7 @@ MARKER_ORDER = {"fault_confirmed": 0, "fault_updated": 1, "fault_cleared": 2, "c
 
 # t_s, counter, confirmation threshold, healing threshold, PASSED (0/1), status index
 TracePoint = tuple[float, int, int, int, int, int]
+_RawPoint = tuple[int, int, int, int, int, int]  # the same with t_ns, while being collected
 
 
 def shown(value: str | None, limit: int = TEXT_CAP) -> str | None:
@@ -166,57 +171,94 @@ class _Bands:
         return bands
 
 
+# A marker before its tooltip is written: (t_ns, kind, the record's row); tips are made only for
+# the markers drawn.
+_PendingMarker = tuple[int, str, Row]
+
+
 @dataclass(slots=True)
 class _Markers:
+    """Each kind of marker is drawn exactly up to MARKER_CAP of that kind; a denser kind (the
+    ``fault_updated`` of every PASSED on a confirmed fault) is drawn once per time bin it
+    appears in. So no kind of marker ever vanishes from a stretch of the timeline, and the rare
+    ones (confirmed, cleared, ClearFault) are each drawn where they happened."""
+
     span: Span
-    exact: list[Marker] = field(default_factory=list)
-    binned: dict[tuple[int, int], tuple[Marker, int]] = field(default_factory=dict)
+    exact: list[_PendingMarker] = field(default_factory=list)  # in the order added
+    binned: dict[tuple[int, int], tuple[_PendingMarker, int]] = field(default_factory=dict)
+    per_kind: Counter[str] = field(default_factory=Counter)
     count: int = 0
 
-    def add(self, marker: Marker) -> None:
+    def add(self, t_ns: int, kind: str, row: Row) -> None:
         self.count += 1
-        if self.count <= MARKER_CAP:
-            self.exact.append(marker)
-        key = (self.span.bin(marker.t_ns, MARKER_BINS), MARKER_ORDER.get(marker.kind, 9))
-        first, seen = self.binned.get(key, (marker, 0))
+        self.per_kind[kind] += 1
+        if self.per_kind[kind] <= MARKER_CAP:
+            self.exact.append((t_ns, kind, row))
+        key = (self.span.bin(t_ns, MARKER_BINS), MARKER_ORDER.get(kind, 9))
+        first, seen = self.binned.get(key, ((t_ns, kind, row), 0))
         self.binned[key] = (first, seen + 1)
 
-    def result(self) -> list[Marker]:
-        if self.count <= MARKER_CAP:
-            return self.exact
-        markers = []
+    def result(self, tip: Callable[[_PendingMarker], str]) -> list[Marker]:
+        dense = {kind for kind, count in self.per_kind.items() if count > MARKER_CAP}
+        markers = [
+            Marker(item[0], item[1], tip(item)) for item in self.exact if item[1] not in dense
+        ]
+        if not dense:
+            return markers
         for (_, _), (first, seen) in sorted(self.binned.items()):
-            extra = f"\n(+{seen - 1} more of this kind nearby: downsampled)" if seen > 1 else ""
-            markers.append(Marker(first.t_ns, first.kind, first.tip + extra))
+            if first[1] in dense:
+                extra = f"\n(+{seen - 1} more of this kind nearby: downsampled)" if seen > 1 else ""
+                markers.append(Marker(first[0], first[1], tip(first) + extra))
         return sorted(markers, key=lambda m: (m.t_ns, MARKER_ORDER.get(m.kind, 9)))
 
 
 @dataclass(slots=True)
 class _Trace:
+    """The counter trace: every point up to TRACE_CAP; beyond, per time bin the lowest and the
+    highest counter, and every point where the status changed (up to TRACE_CAP of them; beyond,
+    the first point of each status a bin changes to), so no status change is drawn away."""
+
     span: Span
-    exact: list[TracePoint] = field(default_factory=list)
-    binned: dict[int, tuple[tuple[int, TracePoint], tuple[int, TracePoint]]] = field(
+    exact: list[_RawPoint] = field(default_factory=list)
+    binned: dict[int, tuple[tuple[int, _RawPoint], tuple[int, _RawPoint]]] = field(
         default_factory=dict
     )
+    changes: list[tuple[int, _RawPoint]] = field(default_factory=list)
+    binned_changes: dict[tuple[int, int], tuple[int, _RawPoint]] = field(default_factory=dict)
+    last_status: int | None = None
     count: int = 0
 
-    def add(self, t_ns: int, point: TracePoint) -> None:
+    def add(self, point: _RawPoint, key: int) -> None:
+        """One point, in time bin ``key`` of TRACE_BINS (``Span.bin``, worked out by the caller
+        with the arithmetic inlined: this runs once per report)."""
         self.count += 1
         if self.count <= TRACE_CAP:
             self.exact.append(point)
-        key = self.span.bin(t_ns, TRACE_BINS)
         item = (self.count, point)
         low, high = self.binned.get(key, (item, item))
-        self.binned[key] = (
-            item if point[1] < low[1][1] else low,
-            item if point[1] > high[1][1] else high,
-        )
+        if point[1] < low[1][1] or point[1] > high[1][1] or low is item:
+            self.binned[key] = (
+                item if point[1] < low[1][1] else low,
+                item if point[1] > high[1][1] else high,
+            )
+        if point[5] != self.last_status:
+            self.last_status = point[5]
+            if len(self.changes) < TRACE_CAP:
+                self.changes.append(item)
+            self.binned_changes.setdefault((key, point[5]), item)
 
     def result(self) -> list[TracePoint]:
         if self.count <= TRACE_CAP:
-            return self.exact
-        kept = {item for pair in self.binned.values() for item in pair}
-        return [point for _, point in sorted(kept)]
+            kept = self.exact
+        else:
+            numbered = {item for pair in self.binned.values() for item in pair}
+            if len(self.changes) < TRACE_CAP:
+                numbered.update(self.changes)
+            else:
+                numbered.update(self.binned_changes.values())
+            kept = [point for _, point in sorted(numbered)]
+        seconds = self.span.seconds
+        return [(seconds(p[0]), p[1], p[2], p[3], p[4], p[5]) for p in kept]
 
 
 @dataclass(slots=True)
@@ -247,55 +289,54 @@ def _band_tip(span: Span, start: int, end: int, status: str, cause: str, source:
 
 
 def build_lanes(result: Result, span: Span) -> list[Lane]:
-    """The timeline rows, in fault-code order (at most ROW_CAP, the most serious kept)."""
+    """The timeline rows, in fault-code order (at most ROW_CAP, the most serious kept).
+
+    Reads the record lists as rows (a spool's as they are stored): a long recording's records
+    are never rebuilt one by one just to be counted into bins.
+    """
     kept = _kept_codes(result.faults)
     bands = {code: _Bands(span) for code in kept}
     markers = {code: _Markers(span) for code in kept}
     traces = {code: _Trace(span) for code in kept}
     open_bands: dict[str, tuple[int, str, str, str | None]] = {}
-    for tr in result.transitions:
-        if tr.fault_code not in kept:
-            continue
-        previous = open_bands.get(tr.fault_code)
-        if previous is not None:
-            start, status, cause, source = previous
-            tip = _band_tip(span, start, tr.t_ns, status, cause, source)
-            bands[tr.fault_code].add(Band(start, tr.t_ns, status, tip))
-        open_bands[tr.fault_code] = (tr.t_ns, tr.to_status, tr.cause, tr.source_id)
+    t_at, code_at, to_at, cause_at, source_at = _columns(
+        TRANSITION_ROWS, "t_ns", "fault_code", "to_status", "cause", "source_id"
+    )
+    for batch in row_batches(result.transitions, TRANSITION_ROWS):
+        for row in batch:
+            code = row[code_at]
+            if code not in kept:
+                continue
+            t_ns = row[t_at]
+            previous = open_bands.get(code)
+            if previous is not None:
+                start, status, cause, source = previous
+                tip = _band_tip(span, start, t_ns, status, cause, source)
+                bands[code].add(Band(start, t_ns, status, tip))
+            open_bands[code] = (
+                t_ns,
+                row[to_at],
+                row[cause_at],
+                row[source_at],
+            )
     for code, (start, status, cause, source) in sorted(open_bands.items()):
         end = max(span.end_ns, start)
         bands[code].add(
             Band(start, end, status, _band_tip(span, start, end, status, cause, source))
         )
-    for event in result.events:
-        code = event.fault.fault_code
-        if code in kept:
-            auto = ", ".join(map(str, shown_list(event.auto_cleared_codes)))
-            tip = (
-                f"{event.event_type} at {span.label(event.t_ns)}\nstatus {event.fault.status}, "
-                f"severity {severity_name(event.fault.severity)}, "
-                f"occurrences {event.fault.occurrence_count}"
-                + (f"\nauto-cleared: {auto}" if auto else "")
-            )
-            markers[code].add(Marker(event.t_ns, event.event_type, tip))
-    for clear in result.clears:
-        if clear.fault_code in kept:
-            verdict = "succeeded" if clear.success else "failed"
-            message = clip(clear.message, TEXT_CAP)
-            tip = f"ClearFault at {span.label(clear.t_ns)}: {verdict}\n{message}".rstrip()
-            markers[clear.fault_code].add(Marker(clear.t_ns, "clear", tip))
-    for report in result.reports:
-        if report.fault_code not in kept or not report.accepted:
-            continue
-        counter = report.debounce_counter
-        conf = report.confirmation_threshold
-        heal = report.healing_threshold
-        if counter is None or conf is None or heal is None:
-            continue
-        passed = 1 if report.event_type == "PASSED" else 0
-        status_index = STATUS_INDEX.get(report.status or "", -1)
-        point = (span.seconds(report.t_ns), counter, conf, heal, passed, status_index)
-        traces[report.fault_code].add(report.t_ns, point)
+    t_at, kind_at, code_at = _columns(EVENT_ROWS, "t_ns", "event_type", "fault_code")
+    for batch in row_batches(result.events, EVENT_ROWS):
+        for row in batch:
+            code = row[code_at]
+            if code in kept:
+                markers[code].add(row[t_at], row[kind_at], row)
+    t_at, code_at = _columns(CLEAR_ROWS, "t_ns", "fault_code")
+    for batch in row_batches(result.clears, CLEAR_ROWS):
+        for row in batch:
+            code = row[code_at]
+            if code in kept:
+                markers[code].add(row[t_at], "clear", row)
+    _traces(result, span, traces)
     near: dict[str, list[NearMiss]] = {}
     near_count: dict[str, int] = {}
     for miss in result.near_misses:
@@ -304,12 +345,13 @@ def build_lanes(result: Result, span: Span) -> list[Lane]:
             listed = near.setdefault(miss.fault_code, [])
             if len(listed) < NEAR_CAP:
                 listed.append(miss)
+    marker_tip = _marker_tip(span)
     return [
         Lane(
             fault=fault,
             bands=bands[fault.fault_code].result(),
             band_periods=bands[fault.fault_code].count,
-            markers=markers[fault.fault_code].result(),
+            markers=markers[fault.fault_code].result(marker_tip),
             marker_count=markers[fault.fault_code].count,
             trace=traces[fault.fault_code].result(),
             trace_count=traces[fault.fault_code].count,
@@ -319,6 +361,64 @@ def build_lanes(result: Result, span: Span) -> list[Lane]:
         for fault in result.faults
         if fault.fault_code in kept
     ]
+
+
+def _columns(rows: RecordRows[Any], *names: str) -> tuple[int, ...]:
+    return tuple(rows.names.index(name) for name in names)
+
+
+def _traces(result: Result, span: Span, traces: dict[str, _Trace]) -> None:
+    """Each accepted report's counter, thresholds and resulting status, into its fault's trace."""
+    t_at, code_at, accepted_at, counter_at, conf_at, heal_at, event_at, status_at = _columns(
+        REPORT_ROWS,
+        "t_ns",
+        "fault_code",
+        "accepted",
+        "debounce_counter",
+        "confirmation_threshold",
+        "healing_threshold",
+        "event_type",
+        "status",
+    )
+    status_index = STATUS_INDEX.get
+    start, duration, last_bin = span.start_ns, span.duration_ns, TRACE_BINS - 1
+    for batch in row_batches(result.reports, REPORT_ROWS):
+        for row in batch:
+            trace = traces.get(row[code_at])
+            if trace is None or not row[accepted_at]:
+                continue
+            counter, conf, heal = row[counter_at], row[conf_at], row[heal_at]
+            if counter is None or conf is None or heal is None:
+                continue
+            t_ns = row[t_at]
+            key = (t_ns - start) * TRACE_BINS // duration  # Span.bin, inlined
+            key = 0 if key < 0 else last_bin if key > last_bin else key
+            passed = 1 if row[event_at] == "PASSED" else 0
+            point = (t_ns, counter, conf, heal, passed, status_index(row[status_at], -1))
+            trace.add(point, key)
+
+
+def _marker_tip(span: Span) -> Callable[[_PendingMarker], str]:
+    """The tooltip of a drawn marker, from its event's or ClearFault's row."""
+    ev_status, ev_severity, ev_occurrences, ev_auto = _columns(
+        EVENT_ROWS, "status", "severity", "occurrence_count", "auto_cleared_codes"
+    )
+    cl_success, cl_message = _columns(CLEAR_ROWS, "success", "message")
+
+    def tip(marker: _PendingMarker) -> str:
+        t_ns, kind, row = marker
+        if kind == "clear":
+            verdict = "succeeded" if row[cl_success] else "failed"
+            message = clip(row[cl_message], TEXT_CAP)
+            return f"ClearFault at {span.label(t_ns)}: {verdict}\n{message}".rstrip()
+        auto = ", ".join(map(str, shown_list(row[ev_auto])))
+        return (
+            f"{kind} at {span.label(t_ns)}\nstatus {row[ev_status]}, "
+            f"severity {severity_name(row[ev_severity])}, "
+            f"occurrences {row[ev_occurrences]}" + (f"\nauto-cleared: {auto}" if auto else "")
+        )
+
+    return tip
 
 
 def page_data(lanes: list[Lane], span: Span) -> dict[str, object]:

@@ -6,7 +6,6 @@ every number in it is an integer (times, counts), and the encoders refuse NaN an
 
 from __future__ import annotations
 
-import io
 import json
 from dataclasses import fields, is_dataclass
 from operator import attrgetter
@@ -20,13 +19,16 @@ from medkit_replay.model import (
     InputSummary,
     MutedFault,
     NearMiss,
+    RecordRows,
     ReportRecord,
     Transition,
 )
+from medkit_replay.outputs.json_rows import ROW_SEPARATOR, Chunk, RecordLines
 from medkit_replay.result import REPORT_SCHEMA
+from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable
+    from collections.abc import Callable, Iterable, Iterator, Sequence
 
     from medkit_replay.result import Result
 
@@ -80,10 +82,30 @@ input_dict = record_dict(InputSummary)
 
 
 class _Rows:
-    """A list written item by item, so a long report is never held in memory whole."""
+    """A long list written batch by batch, so a long report is never held in memory whole."""
 
-    def __init__(self, items: Iterable[JsonObject]) -> None:
-        self.items = items
+    def __init__(self, lines: RecordLines, records: Sequence[Any]) -> None:
+        self.lines = lines
+        self.records = records
+
+    def dicts(self) -> list[JsonObject]:
+        """Every record as the report lists it."""
+        return [self.lines.as_dict(r) for r in self.records]
+
+    def chunks(self) -> Iterator[Chunk]:
+        """The records as report lines, in batches; spooled rows are never made records."""
+        records = self.records
+        if isinstance(records, Spool) and isinstance(records.codec, RecordRows):
+            codec = records.codec
+            return self.lines.row_chunks(records.row_batches(), codec.names, codec.decode)
+        return self.lines.chunks(records)
+
+
+_EVENTS = RecordLines(FaultEvent, event_dict)
+_TRANSITIONS = RecordLines(Transition, transition_dict)
+_REPORTS = RecordLines(ReportRecord, report_dict)
+_CLEARS = RecordLines(ClearRecord, clear_dict)
+_NEAR_MISSES = RecordLines(NearMiss, near_miss_dict)
 
 
 def _sections(result: Result) -> list[tuple[str, object]]:
@@ -94,13 +116,13 @@ def _sections(result: Result) -> list[tuple[str, object]]:
         ("tool_version", result.tool_version),
         ("inputs", [input_dict(i) for i in result.inputs]),
         ("faults", [fault_dict(f) for f in result.faults]),
-        ("events", _Rows(event_dict(e) for e in result.events)),
-        ("transitions", _Rows(transition_dict(t) for t in result.transitions)),
-        ("reports", _Rows(report_dict(r) for r in result.reports)),
-        ("clears", _Rows(clear_dict(c) for c in result.clears)),
+        ("events", _Rows(_EVENTS, result.events)),
+        ("transitions", _Rows(_TRANSITIONS, result.transitions)),
+        ("reports", _Rows(_REPORTS, result.reports)),
+        ("clears", _Rows(_CLEARS, result.clears)),
         ("muted_faults", [muted_dict(m) for m in result.muted_faults]),
         ("clusters", [cluster_dict(c) for c in result.clusters]),
-        ("near_misses", _Rows(near_miss_dict(n) for n in result.near_misses)),
+        ("near_misses", _Rows(_NEAR_MISSES, result.near_misses)),
         (
             "retroactive_cluster_mutes",
             [
@@ -133,42 +155,50 @@ def _sections(result: Result) -> list[tuple[str, object]]:
 def to_report(result: Result) -> JsonObject:
     """The whole report as a JSON-ready dict (materialises every list)."""
     return {
-        key: list(value.items) if isinstance(value, _Rows) else value
+        key: value.dicts() if isinstance(value, _Rows) else value
         for key, value in _sections(result)
     }
 
 
-def _dump(value: object, indent: str) -> str:
+def _dump(value: object) -> bytes:
     text = json.dumps(value, indent=2, ensure_ascii=True, allow_nan=False)
-    return text.replace("\n", "\n" + indent)
+    return text.replace("\n", "\n  ").encode("ascii")
 
 
-_ROW = json.JSONEncoder(ensure_ascii=True, separators=(", ", ": "), allow_nan=False)
-
-
-def write_json(result: Result, stream: IO[str]) -> None:
-    """Stream the report, ASCII-only, keys in the contract's order.
+def report_chunks(result: Result) -> Iterator[Chunk]:
+    """The report as ASCII bytes, piece by piece, keys in the contract's order.
 
     Small sections are indented; the long record lists (events, transitions, reports,
     clears, near misses) hold one record per line, which keeps the file greppable and
-    diffable and lets the C encoder write them (an indenting encoder is pure Python).
+    diffable (and lets them be encoded in bulk: ``outputs/json_rows.py``).
     """
-    stream.write("{")
+    yield b"{"
     for number, (key, value) in enumerate(_sections(result)):
-        stream.write(("," if number else "") + f"\n  {json.dumps(key)}: ")
+        yield ("," if number else "").encode() + b"\n  " + json.dumps(key).encode() + b": "
         if not isinstance(value, _Rows):
-            stream.write(_dump(value, "  "))
+            yield _dump(value)
             continue
         empty = True
-        for item in value.items:
-            stream.write(("[\n    " if empty else ",\n    ") + _ROW.encode(item))
+        for chunk in value.chunks():
+            yield b"[\n    " if empty else ROW_SEPARATOR
+            yield chunk
             empty = False
-        stream.write("[]" if empty else "\n  ]")
-    stream.write("\n}\n")
+        yield b"[]" if empty else b"\n  ]"
+    yield b"\n}\n"
+
+
+def write_json_bytes(result: Result, stream: IO[bytes]) -> None:
+    """Stream the report to a binary stream (ASCII-only)."""
+    for chunk in report_chunks(result):
+        stream.write(chunk)
+
+
+def write_json(result: Result, stream: IO[str]) -> None:
+    """Stream the report to a text stream (ASCII-only)."""
+    for chunk in report_chunks(result):
+        stream.write(str(chunk, "ascii"))
 
 
 def dumps(result: Result) -> str:
     """The report as text (held in memory; prefer write_json for big recordings)."""
-    buffer = io.StringIO()
-    write_json(result, buffer)
-    return buffer.getvalue()
+    return b"".join(report_chunks(result)).decode("ascii")

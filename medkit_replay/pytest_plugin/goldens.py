@@ -100,12 +100,11 @@ def assert_matches_golden(
 
 
 def _write_golden(result: Result, path: Path) -> None:
-    """Write a golden report whole (a temporary file renamed into place)."""
+    """Write a golden report whole (a temporary file renamed into place), compressed when its
+    name ends in ``.gz`` or ``.zst``."""
     with keeping_modules():
-        from medkit_replay.outputs.atomic import atomic_text  # noqa: PLC0415
-        from medkit_replay.outputs.json_report import write_json  # noqa: PLC0415
+        from medkit_replay.outputs.report_file import write_report  # noqa: PLC0415
 
         path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_text(path) as stream:
-            write_json(result, stream)
+        write_report(result, path)
     note_updated(path)

@@ -94,3 +94,32 @@ class Page(HTMLParser):
         lanes = self.data()["lanes"]
         assert isinstance(lanes, list)
         return lanes
+
+
+LONG_MISSION_S = 1800
+"""Bag time of the generated long mission: half an hour at 10 Hz per fault."""
+
+
+def long_mission(folder: Path) -> Result:
+    """A generated long mission, dense enough to make the page down-sample every series.
+
+    ``DENSE``: a report every 100 ms, FAILED (each a ``fault_updated`` on the confirmed fault)
+    but for two bursts of PASSED every 150 s that heal it twice within 2.4 s (dozens of status
+    changes, confirmed and cleared events close together). ``FLAPPY``: confirms and
+    heals every 8 s (hundreds of status periods). ``QUIET``: one FAILED report.
+    """
+    config = folder / "params.yaml"
+    config.write_text(
+        "fault_manager:\n  ros__parameters:\n    confirmation_threshold: -3\n"
+        "    healing_enabled: true\n    healing_threshold: 3\n",
+        encoding="utf-8",
+    )
+    lines = [report(MS // 2, "QUIET", "FAILED", severity=3)]
+    for tick in range(LONG_MISSION_S * 10):
+        t_ns = tick * 100 * MS + MS
+        burst = tick % 1500 < 8 or 16 <= tick % 1500 < 24  # heal, confirm, heal within 2.4 s
+        lines.append(report(t_ns, "DENSE", "PASSED" if burst else "FAILED", severity=2))
+        if tick % 5 == 0:
+            flap = "FAILED" if (tick // 40) % 2 == 0 else "PASSED"
+            lines.append(report(t_ns + 1, "FLAPPY", flap, severity=1))
+    return replay([write_script(folder / "long.jsonl", lines)], [config])

@@ -17,7 +17,14 @@ import pytest
 from medkit_replay.outputs.html import write_html
 from medkit_replay.pipeline import replay
 from tests.outputs.cdp import CHROMIUM_FLAGS, Browser, chromium_binary
-from tests.outputs.html_support import SEC, Page, example_result, report, write_script
+from tests.outputs.html_support import (
+    SEC,
+    Page,
+    example_result,
+    long_mission,
+    report,
+    write_script,
+)
 from tests.outputs.test_html import HOSTILE, hostile_result
 
 if TYPE_CHECKING:
@@ -124,6 +131,19 @@ def test_near_misses_are_shown(chromium: str, tmp_path: Path) -> None:
     assert [line for line in done.stderr.splitlines() if CONSOLE.search(line)] == []
     assert "Closest: counter -2 against threshold -3 \u2014 1 FAILED report short" in done.stdout
     assert "Near misses (2)" in done.stdout
+
+
+def test_long_dense_mission_renders(chromium: str, tmp_path: Path) -> None:
+    """Half an hour of 10 Hz reports: the down-sampled page opens with no console message."""
+    result = long_mission(tmp_path)
+    page, console = rendered(chromium, tmp_path, result, "DENSE")
+    assert console == []
+    body = body_of(page)
+    assert body.get("data-rendered") == "ok"
+    assert "data-js-errors" not in body
+    assert body.get("data-rows") == "3"
+    (detail,) = page.with_class("fault-detail")
+    assert detail["data-code"] == "DENSE"
 
 
 def test_empty_recording_renders(chromium: str, tmp_path: Path) -> None:
