@@ -103,6 +103,7 @@ HEAVY_AT_START = (
         ["analyze", "--help"],
         ["check", "--help"],
         ["diff", "--help"],
+        ["explain", "--help"],
         ["fleet", "--help"],
     ],
 )

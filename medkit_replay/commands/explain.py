@@ -15,18 +15,8 @@ import click
 from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.explaining import (
-    build_story,
-    known_codes,
-    nearest_codes,
-    print_story,
-    write_story_json,
-)
 from medkit_replay.model import NS_PER_SEC
-from medkit_replay.outputs.progress import progress_bar
-from medkit_replay.pipeline import replay
 from medkit_replay.text import clip, printable
-from medkit_replay.trace import FaultTrace
 
 MAX_CODE_SHOWN = 200
 
@@ -79,6 +69,18 @@ def explain(
       medkit-replay explain mission/ WIFI_SIGNAL_STRENGTH --config robot_params.yaml --at 57.3
       medkit-replay explain run.jsonl MOTOR_OVERHEAT --json > story.json
     """
+    # The replay's machinery loads only when the command runs (``--help`` stays light).
+    from medkit_replay.explaining import (  # noqa: PLC0415
+        build_story,
+        known_codes,
+        nearest_codes,
+        print_story,
+        write_story_json,
+    )
+    from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+    from medkit_replay.pipeline import replay  # noqa: PLC0415
+    from medkit_replay.trace import FaultTrace  # noqa: PLC0415
+
     trace = FaultTrace(fault_code=code, at_offset_ns=_at_offset_ns(at))
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
