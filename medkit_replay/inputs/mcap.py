@@ -510,9 +510,12 @@ class McapFile:
     def _read_linear(
         self, bio: BinaryIO, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
-        pos, end = self._data_start, self._data_end
+        pos = self._data_start
         bio.seek(pos)
-        while pos < end:
+        while pos < self._data_end or self._grow(pos + 1):
+            if pos + 9 > self._data_end and self._grow(pos + 9):
+                bio.seek(pos)
+            end = self._data_end
             head = bio.read(9)
             if len(head) < 9:
                 self._truncated(pos, "a record header")
@@ -530,6 +533,9 @@ class McapFile:
                     f"{pos}; the last {self._size - pos} bytes are lost"
                 )
                 return
+            if body_end > end and self._grow(body_end):
+                end = self._data_end
+                bio.seek(pos + 9)
             if body_end > end:
                 if op == OP_CHUNK and end - pos - 9 > 0:
                     yield from self._chunk(
@@ -562,6 +568,11 @@ class McapFile:
                     self.warn(f"{self.path}: damaged schema or channel at byte {pos}: {exc}")
             pos = body_end
             bio.seek(pos)
+
+    def _grow(self, need: int) -> bool:
+        """Whether the data now reaches byte ``need``; a followed file waits for its writer
+        here (:mod:`medkit_replay.inputs.mcap_tail`), a file read as it stands never grows."""
+        return need <= self._data_end
 
     def _parse_records(self, body: bytes, op: int) -> None:
         if op == OP_SCHEMA:
