@@ -58,7 +58,8 @@ class Db3Tail(Db3File):
     ) -> None:
         self._follow = follow
         self._done = done
-        self._said_locked = False
+        self._waited = False  # for the writer to leave a journal mode other than WAL
+        self._live = False  # read while written
         super().__init__(path, file_no, warn)
 
     def _open(self, path: Path) -> None:
@@ -120,13 +121,10 @@ class Db3Tail(Db3File):
         if done and not mirror.wal.exists():
             return self.path
         if not done and not is_wal_mode(self.path):
-            if not self._said_locked:
-                self._said_locked = True
-                self._follow.notes.append(
-                    f"{self.path}: not in WAL mode; it cannot be read while written without "
-                    "locking it, so it is read when the recording is finished"
-                )
+            self._waited = True
             return None
+        if not done:
+            self._live = True
         if mirror.refresh():
             return mirror.copy
         return None
@@ -184,6 +182,11 @@ class Db3Tail(Db3File):
 
     def _finish(self, source: Path | None, wanted: set[int], losses: dict[str, _Losses]) -> None:
         """Counts, span and the rows skipped, from the last database read (as a finished file)."""
+        if self._waited and not self._live:
+            self._follow.notes.append(
+                f"{self.path}: not in WAL mode; it cannot be read while written without "
+                "locking it, so it was read once the writer was done with it"
+            )
         if source is not None:
             try:
                 with closing(_connect(source, immutable=True, limit=SCHEMA_VALUE_LIMIT)) as db:

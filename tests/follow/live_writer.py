@@ -1,0 +1,130 @@
+"""A recorder stand-in for the follow tests: writes a sample recording in real time, batch by batch.
+
+Run as a process: ``python tests/follow/live_writer.py OUT --storage mcap --delay 0.1``.
+``live`` writes with rosbags' Writer (MCAP chunks closed and flushed per batch; sqlite3 in WAL
+mode, one commit per batch); ``relay`` writes finished part files byte range by byte range (split
+files, records torn at every boundary), then metadata.yaml.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import yaml
+from rosbags.rosbag2 import Writer
+from rosbags.rosbag2.enums import StoragePlugin
+
+from sample_bags import make_sample_bags as samples
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from rosbags.interfaces import Connection
+
+
+def records(name: str) -> list[samples.Rec]:
+    """The sample's messages in log-time order: ``nav2`` (the mission) or ``services``."""
+    return samples.nav2_mission() if name == "nav2" else samples.service_calls()
+
+
+def _batches(items: list[samples.Rec], count: int) -> list[list[samples.Rec]]:
+    size = -(-len(items) // count)
+    return [items[k : k + size] for k in range(0, len(items), size)]
+
+
+def write_live(
+    out: Path,
+    storage: str,
+    items: list[samples.Rec],
+    batches: int,
+    delay: float,
+    wal_pages: int = 1000,
+) -> None:
+    """Write with rosbags' Writer, making each batch visible before sleeping."""
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    writer = Writer(out, version=9, storage_plugin=plugin)
+    writer.open()
+    store = writer.storage
+    if storage == "sqlite3":
+        conn = store.conn  # type: ignore[union-attr]
+        conn.commit()
+        conn.execute("PRAGMA journal_mode=WAL")
+        conn.execute(f"PRAGMA wal_autocheckpoint={wal_pages}")
+    connections: dict[tuple[str, str], Connection] = {}
+    for batch in _batches(items, batches):
+        for rec in batch:
+            key = (rec.topic, rec.msgtype)
+            if key not in connections:
+                connections[key] = writer.add_connection(
+                    rec.topic,
+                    rec.msgtype,
+                    msgdef=samples.definition(rec.msgtype),
+                    rihs01=samples.TS.hash_rihs01(rec.msgtype),
+                )
+            data = bytes(samples.TS.serialize_cdr(rec.msg, rec.msgtype))
+            writer.write(connections[key], rec.t_ns, data)
+        if storage == "mcap":
+            store.close_chunk()  # type: ignore[union-attr]
+            store.bio.flush()  # type: ignore[union-attr]
+        else:
+            store.conn.commit()  # type: ignore[union-attr]
+        time.sleep(delay)
+    writer.close()
+
+
+def write_relay(out: Path, name: str, parts: int, step: int, delay: float, finish: bool) -> None:
+    """Write ``parts`` finished MCAP part files into ``out`` ``step`` bytes at a time."""
+    bare = out.suffix == ".mcap"  # one bare file, finished by its footer alone
+    if not bare:
+        out.mkdir()
+    items = records(name)
+    with tempfile.TemporaryDirectory() as tmp:
+        built = []
+        for number, part in enumerate(_batches(items, parts)):
+            bag = Path(tmp) / f"part{number}"
+            write_live(bag, "mcap", part, 20, 0)  # chunks of a twentieth each
+            built.append(next(bag.glob("*.mcap")))
+        meta = yaml.safe_load((Path(tmp) / "part0" / "metadata.yaml").read_text())
+        info = meta["rosbag2_bagfile_information"]
+        names = [f"{out.name}_{number}.mcap" for number in range(len(built))]
+        info["relative_file_paths"] = names
+        info["files"] = [{"path": file} for file in names]
+        for source, file in zip(built, names, strict=True):
+            data = source.read_bytes()
+            with (out if bare else out / file).open("wb") as sink:
+                for start in range(0, len(data), step):
+                    sink.write(data[start : start + step])
+                    sink.flush()
+                    time.sleep(delay)
+    if finish and not bare:
+        (out / "metadata.yaml").write_text(yaml.safe_dump(meta))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--mode", choices=["live", "relay"], default="live")
+    parser.add_argument("--storage", choices=["mcap", "sqlite3"], default="mcap")
+    parser.add_argument("--records", choices=["nav2", "services"], default="nav2")
+    parser.add_argument("--batches", type=int, default=20)
+    parser.add_argument("--delay", type=float, default=0.1)
+    parser.add_argument("--wal-pages", type=int, default=1000)
+    parser.add_argument("--parts", type=int, default=2)
+    parser.add_argument("--step", type=int, default=4099)
+    parser.add_argument("--unfinished", action="store_true", help="never write metadata.yaml")
+    args = parser.parse_args(argv)
+    if args.mode == "live":
+        items = records(args.records)
+        write_live(args.out, args.storage, items, args.batches, args.delay, args.wal_pages)
+    else:
+        write_relay(args.out, args.records, args.parts, args.step, args.delay, not args.unfinished)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
