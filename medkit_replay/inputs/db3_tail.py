@@ -58,7 +58,7 @@ class Db3Tail(Db3File):
     ) -> None:
         self._follow = follow
         self._done = done
-        self._waited = False  # for the writer to leave a journal mode other than WAL
+        self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
         super().__init__(path, file_no, warn)
 
@@ -121,13 +121,21 @@ class Db3Tail(Db3File):
         if done and not mirror.wal.exists():
             return self.path
         if not done and not is_wal_mode(self.path):
-            self._waited = True
+            if self._waited is None:
+                self._waited = self._stat()
             return None
         if not done:
             self._live = True
         if mirror.refresh():
             return mirror.copy
         return None
+
+    def _stat(self) -> tuple[int, int]:
+        try:
+            info = self.path.stat()
+        except OSError:
+            return (-1, -1)
+        return (info.st_size, info.st_mtime_ns)
 
     def _new_topics(
         self,
@@ -182,7 +190,7 @@ class Db3Tail(Db3File):
 
     def _finish(self, source: Path | None, wanted: set[int], losses: dict[str, _Losses]) -> None:
         """Counts, span and the rows skipped, from the last database read (as a finished file)."""
-        if self._waited and not self._live:
+        if self._waited is not None and not self._live and self._waited != self._stat():
             self._follow.notes.append(
                 f"{self.path}: not in WAL mode; it cannot be read while written without "
                 "locking it, so it was read once the writer was done with it"

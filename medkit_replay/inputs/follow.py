@@ -12,6 +12,10 @@ POLL_MIN_S = 0.05
 POLL_MAX_S = 5.0
 """Bounds of the poll interval (seconds): fast enough to follow, slow enough to cost nothing."""
 POLL_DEFAULT_S = 0.5
+SETTLE_S = 2.0
+"""How long the signs that the writer is done with a file (metadata.yaml, the next split file)
+must stand before the file is taken as finished without its own end (an MCAP's Data End
+record, a closed database): rosbag2 writes them just before it closes the file."""
 
 
 class FollowStopped(BaseException):  # not an Exception: no reader's last-resort handler takes it
@@ -42,6 +46,7 @@ class Follow:
     stopped: str | None = None
     notes: list[str] = field(default_factory=list)
     _last_data: float = field(default_factory=time.monotonic)
+    _since: dict[object, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.poll_s = min(max(self.poll_s, POLL_MIN_S), POLL_MAX_S)
@@ -54,6 +59,14 @@ class Follow:
     def saw_data(self) -> None:
         """Something new arrived: the idle timeout starts again."""
         self._last_data = time.monotonic()
+
+    def lasting(self, key: object, holds: bool) -> bool:
+        """Whether ``holds`` has been true at every look for SETTLE_S (at least two polls)."""
+        if not holds:
+            self._since.pop(key, None)
+            return False
+        since = self._since.setdefault(key, time.monotonic())
+        return time.monotonic() - since >= max(SETTLE_S, 2 * self.poll_s)
 
     def check(self) -> None:
         """Raise :class:`FollowStopped` if a stop was asked for.

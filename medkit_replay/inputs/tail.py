@@ -13,6 +13,7 @@ from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.mcap_tail import McapTail
 from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _storage_files
 from medkit_replay.inputs.storage import NotABagError
+from medkit_replay.inputs.wal import is_wal_mode
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -63,13 +64,26 @@ class TailInput(Rosbag2Input):
         return [p for p in _storage_files(self.path) if p.suffix.lower() in FOLLOWED_SUFFIXES]
 
     def _moved_on(self, index: int, path: Path) -> Callable[[], bool]:
-        """Whether the writer is done with the file at ``index`` of the listing."""
+        """Whether the writer is done with the file at ``index`` of the listing.
+
+        In a directory: once metadata.yaml or a later file exists and, as rosbag2 writes them
+        just before closing the file, a database has closed (its WAL gone) or that has lasted
+        SETTLE_S. A bare ``.db3`` once its WAL is gone; a bare MCAP only by its Data End record.
+        """
+        wal = path.with_name(path.name + "-wal")
+        closed = path.suffix.lower() == ".db3"  # a closed WAL-mode database has no -wal
+
+        def done() -> bool:
+            later = self._finished() or len(self._listing()) > index + 1
+            if closed and later and not wal.exists() and is_wal_mode(path):
+                return True
+            return self._follow.lasting((self.path, index), later)
+
         if self._directory:
-            return lambda: self._finished() or len(self._listing()) > index + 1
-        if path.suffix.lower() == ".db3":
-            wal = path.with_name(path.name + "-wal")
+            return done
+        if closed:
             return lambda: not wal.exists()
-        return lambda: False  # a bare MCAP file ends at its Data End record
+        return lambda: False
 
     def _next_path(self, index: int) -> Path | None:
         """The storage file at ``index`` once it exists; None when the recording has no more."""
@@ -108,6 +122,7 @@ class TailInput(Rosbag2Input):
                     for item in file.read(self._accepts(len(self._files) - 1), None):
                         yield item
                         self._follow.check()  # a stop is heard while data keeps coming
+                        self._follow.saw_data()  # a backlog read is not idle time
                 except Exception as exc:  # as for a finished file: no reader failure ends it
                     self.ctx.warn(f"{path}: reading stopped ({type(exc).__name__}: {exc})")
                 index += 1

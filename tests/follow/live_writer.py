@@ -44,8 +44,13 @@ def write_live(
     batches: int,
     delay: float,
     wal_pages: int = 1000,
+    metadata_first: bool = False,
 ) -> None:
-    """Write with rosbags' Writer, making each batch visible before sleeping."""
+    """Write with rosbags' Writer, making each batch visible before sleeping.
+
+    ``metadata_first``: as rosbag2 does, metadata.yaml appears before the last batch is stored
+    and the file closed (rosbags' close then writes the real one over it).
+    """
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     writer = Writer(out, version=9, storage_plugin=plugin)
     writer.open()
@@ -56,7 +61,11 @@ def write_live(
         conn.execute("PRAGMA journal_mode=WAL")
         conn.execute(f"PRAGMA wal_autocheckpoint={wal_pages}")
     connections: dict[tuple[str, str], Connection] = {}
-    for batch in _batches(items, batches):
+    parts = _batches(items, batches)
+    for number, batch in enumerate(parts):
+        if metadata_first and number == len(parts) - 1:
+            (out / "metadata.yaml").write_text("rosbag2_bagfile_information: {version: 9}\n")
+            time.sleep(max(delay, 0.5))
         for rec in batch:
             key = (rec.topic, rec.msgtype)
             if key not in connections:
@@ -117,10 +126,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--parts", type=int, default=2)
     parser.add_argument("--step", type=int, default=4099)
     parser.add_argument("--unfinished", action="store_true", help="never write metadata.yaml")
+    parser.add_argument("--metadata-first", action="store_true", help="as rosbag2 writes it")
     args = parser.parse_args(argv)
     if args.mode == "live":
         items = records(args.records)
-        write_live(args.out, args.storage, items, args.batches, args.delay, args.wal_pages)
+        write_live(
+            args.out,
+            args.storage,
+            items,
+            args.batches,
+            args.delay,
+            args.wal_pages,
+            metadata_first=args.metadata_first,
+        )
     else:
         write_relay(args.out, args.records, args.parts, args.step, args.delay, not args.unfinished)
     return 0

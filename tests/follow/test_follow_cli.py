@@ -101,6 +101,17 @@ def test_sqlite3_in_wal_mode_while_written(tmp_path: Path) -> None:
     assert sorted(p.name for p in bag.iterdir()) == ["bag.db3", "metadata.yaml"]
 
 
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_metadata_written_before_the_file_is_closed(tmp_path: Path, storage: str) -> None:
+    # rosbag2 writes metadata.yaml, then closes the storage (last chunk, footer, last commit).
+    bag = tmp_path / "bag"
+    follow_and_compare(
+        tmp_path,
+        bag,
+        ["--storage", storage, "--batches", "8", "--delay", "0.2", "--metadata-first"],
+    )
+
+
 def test_split_files_appearing_with_torn_tails(tmp_path: Path) -> None:
     bag = tmp_path / "bag"
     follow_and_compare(
