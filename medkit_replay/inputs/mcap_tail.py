@@ -5,16 +5,27 @@ The scan of :class:`~medkit_replay.inputs.mcap.McapFile` with a wait where its d
 
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.mcap import MAGIC, OP_CHANNEL, OP_HEADER, McapFile, _Cursor, _DamageError
+from medkit_replay.inputs.mcap import (
+    MAGIC,
+    NO_FOOTER,
+    OP_CHANNEL,
+    OP_HEADER,
+    McapFile,
+    _Cursor,
+    _DamageError,
+)
 from medkit_replay.inputs.storage import NotABagError
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterator
     from pathlib import Path
 
     from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.merge import Bound, Timed
+    from medkit_replay.inputs.storage import Connection, Raw
 
 
 class McapTail(McapFile):
@@ -37,6 +48,7 @@ class McapTail(McapFile):
     ) -> None:
         self._follow = follow
         self._done = done
+        self._unfinished = False  # the writer moved on before the file's Data End record
         super().__init__(path, file_no, warn)
 
     def _probe(self, bio: object) -> None:
@@ -69,6 +81,34 @@ class McapTail(McapFile):
         if profile != "ros2":
             self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
 
+    def read(
+        self, wants: Callable[[Connection], bool], cap_ns: int | None
+    ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
+        """Yield bounds and wanted messages as they are written (see ``StorageFile.read``)."""
+        yield from super().read(wants, cap_ns)
+        if not self._unfinished:
+            self._await_footer()
+
+    def _await_footer(self) -> None:
+        """After the Data End record come the summary and the footer: wait for them, then take
+        the counts and the span from them as for a finished file (and say what a finished file
+        without them would say)."""
+        while True:
+            moved_on = self._done()
+            with self.path.open("rb") as bio:
+                size = os.fstat(bio.fileno()).st_size
+                bio.seek(max(self._data_start, size - len(MAGIC)))
+                if bio.read() == MAGIC or moved_on:
+                    self._size = size
+                    counted = (dict(self.counts), self.start_ns, self.end_ns)
+                    problem = self._read_footer_and_summary(bio)
+                    if self._chunks is None:  # read without an index, as analyze would
+                        self.counts, self.start_ns, self.end_ns = counted
+                        if problem:
+                            self.warn(f"{self.path}: {problem}; scanning the file from the start")
+                    return
+            self._follow.wait()
+
     def _grow(self, need: int) -> bool:
         while True:
             moved_on = self._done()  # before the size: bytes written before it are seen
@@ -79,6 +119,9 @@ class McapTail(McapFile):
             if need <= self._data_end:
                 return True
             if moved_on:
+                if not self._unfinished:  # said as a finished file without its end says it
+                    self._unfinished = True
+                    self.warn(f"{self.path}: {NO_FOOTER}; scanning the file from the start")
                 return False
             self._follow.wait()
 

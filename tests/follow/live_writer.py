@@ -86,7 +86,9 @@ def write_live(
     writer.close()
 
 
-def write_relay(out: Path, name: str, parts: int, step: int, delay: float, finish: bool) -> None:
+def write_relay(
+    out: Path, name: str, parts: int, step: int, delay: float, finish: bool, cut: int = 0
+) -> None:
     """Write ``parts`` finished MCAP part files into ``out`` ``step`` bytes at a time."""
     bare = out.suffix == ".mcap"  # one bare file, finished by its footer alone
     if not bare:
@@ -105,6 +107,8 @@ def write_relay(out: Path, name: str, parts: int, step: int, delay: float, finis
         info["files"] = [{"path": file} for file in names]
         for source, file in zip(built, names, strict=True):
             data = source.read_bytes()
+            if file == names[-1] and cut:
+                data = data[:-cut]  # the recorder died: a torn record, no footer
             with (out if bare else out / file).open("wb") as sink:
                 for start in range(0, len(data), step):
                     sink.write(data[start : start + step])
@@ -126,6 +130,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--parts", type=int, default=2)
     parser.add_argument("--step", type=int, default=4099)
     parser.add_argument("--unfinished", action="store_true", help="never write metadata.yaml")
+    parser.add_argument("--cut", type=int, default=0, help="bytes the last file lacks")
     parser.add_argument("--metadata-first", action="store_true", help="as rosbag2 writes it")
     args = parser.parse_args(argv)
     if args.mode == "live":
@@ -140,7 +145,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             metadata_first=args.metadata_first,
         )
     else:
-        write_relay(args.out, args.records, args.parts, args.step, args.delay, not args.unfinished)
+        finish = not args.unfinished
+        write_relay(args.out, args.records, args.parts, args.step, args.delay, finish, args.cut)
     return 0
 
 
