@@ -23,7 +23,7 @@ from medkit_replay.inputs.db3 import (
 )
 from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.merge import Bound, Timed
-from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError, Raw
+from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError, Raw, temp_room
 from medkit_replay.inputs.wal import WalMirror, is_wal_mode
 
 if TYPE_CHECKING:
@@ -60,6 +60,7 @@ class Db3Tail(Db3File):
         self._done = done
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
+        self._too_large = False  # for a copy in the temporary folder
         super().__init__(path, file_no, warn)
 
     def _open(self, path: Path) -> None:
@@ -125,6 +126,14 @@ class Db3Tail(Db3File):
                 self._waited = self._stat()
             return None
         if not done:
+            if self.path.stat().st_size > temp_room():
+                if not self._too_large:
+                    self._too_large = True
+                    self._follow.notes.append(
+                        f"{self.path}: too large for a copy in the temporary folder; it is "
+                        "read when the recording is finished"
+                    )
+                return None
             self._live = True
         if mirror.refresh():
             return mirror.copy

@@ -82,6 +82,7 @@ def replay(
     if not inputs:
         raise InputError("no input given")
     paths = [Path(p) for p in inputs]
+    configs = tuple(configs)  # read twice when a followed recording is replayed again
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
     options, option_warnings = replay_options(params)

@@ -44,6 +44,17 @@ def test_following_a_finished_sample_is_analyzing_it(sample: str) -> None:
     assert [r for r in seen if isinstance(r, FaultEvent)] == list(plain.events)
 
 
+def test_a_bare_db3_without_wal_is_finished(tmp_path: Path) -> None:
+    source = SAMPLES / "nav2_mission_sqlite3" / "nav2_mission_sqlite3.db3"
+    bare = tmp_path / "download.db3"
+    bare.write_bytes(source.read_bytes())
+    follow = Follow(poll_s=POLL_MIN_S)
+    followed = replay([bare], follow=follow)
+    assert follow.finished
+    assert json_bytes(followed) == json_bytes(replay([bare]))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["download.db3"]
+
+
 def test_a_recorded_call_after_the_bridge_replays_the_finished_recording(
     tmp_path: Path, storage: Storage
 ) -> None:
