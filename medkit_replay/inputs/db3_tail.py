@@ -61,6 +61,7 @@ class Db3Tail(Db3File):
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
         self._too_large = False  # for a copy in the temporary folder
+        self._topics_seen = 0  # rows of the topics table read so far
         super().__init__(path, file_no, warn)
 
     def _open(self, path: Path) -> None:
@@ -153,9 +154,13 @@ class Db3Tail(Db3File):
         wanted: set[int],
         classified: set[int],
     ) -> None:
-        count = db.execute("SELECT count(*) FROM topics").fetchone()[0]
-        if count == len(classified) and len(self.connections) == len(classified):
+        try:
+            count = db.execute("SELECT count(*) FROM topics").fetchone()[0]
+        except sqlite3.OperationalError:
+            return  # the tables are not created yet
+        if count == self._topics_seen:
             return
+        self._topics_seen = count
         try:
             self._read_topics(db)
         except NotABagError:

@@ -17,7 +17,7 @@ from medkit_replay.inputs.mcap import (
     _Cursor,
     _DamageError,
 )
-from medkit_replay.inputs.storage import NotABagError
+from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -64,7 +64,10 @@ class McapTail(McapFile):
                     raise NotABagError("not an MCAP file (bad magic)")
                 if head[len(MAGIC)] != OP_HEADER:
                     raise NotABagError("MCAP file without its header record")
-                self._data_start = head_size + int.from_bytes(head[len(MAGIC) + 1 :], "little")
+                length = int.from_bytes(head[len(MAGIC) + 1 :], "little")
+                if length > RECORD_SIZE_LIMIT:
+                    raise NotABagError("MCAP header record is damaged")
+                self._data_start = head_size + length
                 if self._data_start <= self._size:
                     with self.path.open("rb") as stream:
                         stream.seek(head_size)

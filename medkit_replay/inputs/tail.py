@@ -47,9 +47,10 @@ class TailInput(Rosbag2Input):
 
     A directory is finished when its metadata.yaml exists (rosbag2 writes it when recording
     ends); its storage files are taken in name order as they appear, each read until it is
-    finished (an MCAP file's Data End record, or a later file or metadata.yaml appearing). A
-    bare ``.mcap`` is finished at its Data End record, a bare ``.db3`` once no ``-wal`` is
-    beside it. Until then every look at the files is one poll of the :class:`Follow`.
+    finished (an MCAP file's Data End record; a closed database; or, if neither comes, a later
+    file or metadata.yaml present for SETTLE_S). A bare ``.mcap`` is finished at its Data End
+    record, a bare ``.db3`` once no ``-wal`` is beside it. Until then every look at the files
+    is one poll of the :class:`Follow`.
     """
 
     def __init__(self, path: Path, ctx: InputContext, follow: Follow) -> None:
