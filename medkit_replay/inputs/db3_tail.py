@@ -136,9 +136,14 @@ class Db3Tail(Db3File):
                     )
                 return None
             self._live = True
-        if mirror.refresh():
-            return mirror.copy
-        return None
+        if not mirror.needs_copy():
+            return mirror.copy if mirror.refresh() else None
+        if not done and not self._follow.may_spend(self.path):
+            self._follow.saw_data()  # the WAL restarted since the last copy: the writer is busy
+            return None  # copied again a moment ago: the writer's commits wait for the next
+        with self._follow.spending(self.path):
+            changed = mirror.refresh()
+        return mirror.copy if changed else None
 
     def _stat(self) -> tuple[int, int]:
         try:

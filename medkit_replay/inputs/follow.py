@@ -6,12 +6,19 @@ The only wall clock of the inputs (monotonic, for waiting); what is read keeps b
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
 
 POLL_MIN_S = 0.05
 POLL_MAX_S = 5.0
 """Bounds of the poll interval (seconds): fast enough to follow, slow enough to cost nothing."""
 POLL_DEFAULT_S = 0.5
+COSTLY_SHARE = 0.1
+"""Most of the time a costly step of following may take (copying a database again)."""
 SETTLE_S = 2.0
 """How long the signs that the writer is done with a file (metadata.yaml, the next split file)
 must stand before the file is taken as finished without its own end (an MCAP's Data End
@@ -47,6 +54,7 @@ class Follow:
     notes: list[str] = field(default_factory=list)
     _last_data: float = field(default_factory=time.monotonic)
     _since: dict[object, float] = field(default_factory=dict)
+    _spent: dict[object, tuple[float, float]] = field(default_factory=dict)  # start, duration
 
     def __post_init__(self) -> None:
         self.poll_s = min(max(self.poll_s, POLL_MIN_S), POLL_MAX_S)
@@ -67,6 +75,22 @@ class Follow:
             return False
         since = self._since.setdefault(key, time.monotonic())
         return time.monotonic() - since >= max(SETTLE_S, 2 * self.poll_s)
+
+    def may_spend(self, key: object) -> bool:
+        """Whether a costly step may run again: its last run took at most COSTLY_SHARE of the
+        time since it began (copying a large database again after each WAL restart would
+        otherwise take all the time)."""
+        last = self._spent.get(key)
+        return last is None or time.monotonic() - last[0] >= last[1] / COSTLY_SHARE
+
+    @contextmanager
+    def spending(self, key: object) -> Iterator[None]:
+        """Time a costly step for :meth:`may_spend`."""
+        start = time.monotonic()
+        try:
+            yield
+        finally:
+            self._spent[key] = (start, time.monotonic() - start)
 
     def check(self) -> None:
         """Raise :class:`FollowStopped` if a stop was asked for.

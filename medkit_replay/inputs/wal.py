@@ -101,6 +101,16 @@ class WalMirror:
         self._sums = (0, 0)
         self._synced = False
 
+    def needs_copy(self) -> bool:
+        """Whether the next refresh copies the database again (the WAL restarted, or first)."""
+        header = _Header.read(self.wal)
+        return not (
+            self._synced
+            and header is not None
+            and self._header is not None
+            and header.salts == self._header.salts
+        )
+
     def refresh(self) -> bool:
         """Bring the copy up to the writer's last commit; whether it changed.
 

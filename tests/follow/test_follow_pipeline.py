@@ -6,6 +6,7 @@ Recordings here are finished before they are followed (no waiting); the CLI test
 from __future__ import annotations
 
 import io
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -88,6 +89,16 @@ def test_a_stop_before_the_end_keeps_what_was_read(tmp_path: Path) -> None:
     assert not follow.finished and follow.stopped == "interrupted by SIGINT"
     assert result.summary.messages_read < len(recs)
     assert any("following stopped (interrupted by SIGINT)" in w for w in result.warnings)
+
+
+def test_a_costly_step_takes_a_bounded_share_of_the_time() -> None:
+    follow = Follow()
+    assert follow.may_spend("copy")
+    with follow.spending("copy"):
+        time.sleep(0.05)
+    assert not follow.may_spend("copy")  # not before 10x its cost has passed since it began
+    time.sleep(0.5)
+    assert follow.may_spend("copy")
 
 
 def test_the_poll_interval_is_clamped() -> None:
