@@ -105,6 +105,8 @@ class McapTail(McapFile):
                     self._size = size
                     counted = (dict(self.counts), self.start_ns, self.end_ns)
                     problem = self._read_footer_and_summary(bio)
+                    for cid in sorted(self.connections):
+                        self._wants(cid)  # a channel declared in the summary alone, too
                     if self._chunks is None:  # read without an index, as analyze would
                         self.counts, self.start_ns, self.end_ns = counted
                         if problem:
