@@ -16,6 +16,7 @@ from medkit_replay.inputs.follow import POLL_MAX_S, POLL_MIN_S, Follow
 from medkit_replay.model import FaultEvent, Transition
 from medkit_replay.outputs.json_report import write_json
 from medkit_replay.pipeline import replay
+from tests.follow.live_writer import records, write_live
 from tests.pipeline_support import MS, SEC, WARN, bag, diagnostics, report_call, status
 
 if TYPE_CHECKING:
@@ -110,3 +111,40 @@ def test_the_poll_interval_is_clamped() -> None:
 def storage(request: pytest.FixtureRequest) -> Storage:
     value: Storage = request.param
     return value
+
+
+class Appending(Follow):
+    """A Follow whose every wait is a writer appending the next ``step`` bytes of a recording
+    (and metadata.yaml at the end): torn records at every offset, deterministically."""
+
+    def __init__(self, source: Path, target: Path, step: int) -> None:
+        super().__init__(poll_s=POLL_MIN_S)
+        self.source, self.target, self.step = source, target, step
+        self.files = sorted(p for p in source.iterdir() if p.suffix == ".mcap")
+        self.at = (0, 0)  # file, bytes written
+        target.mkdir()
+
+    def wait(self) -> None:
+        number, done = self.at
+        if number == len(self.files):
+            if not (self.target / "metadata.yaml").exists():
+                (self.target / "metadata.yaml").write_bytes(
+                    (self.source / "metadata.yaml").read_bytes()
+                )
+            super().wait()
+            return
+        data = self.files[number].read_bytes()
+        with (self.target / self.files[number].name).open("ab") as sink:
+            sink.write(data[done : done + self.step])
+        done += self.step
+        self.at = (number + 1, 0) if done >= len(data) else (number, done)
+
+
+@pytest.mark.parametrize("step", [1021, 4099, 65537])
+def test_an_mcap_appended_a_few_bytes_per_poll(tmp_path: Path, step: int) -> None:
+    source = tmp_path / "source"
+    write_live(source, "mcap", records("nav2"), 20, 0)  # the mission in 20 chunks
+    follow = Appending(source, tmp_path / "bag", step)
+    followed = replay([tmp_path / "bag"], follow=follow)
+    assert follow.finished
+    assert json_bytes(followed) == json_bytes(replay([tmp_path / "bag"]))
