@@ -3,12 +3,14 @@
 Run as a process: ``python tests/follow/live_writer.py OUT --storage mcap --delay 0.1``.
 ``live`` writes with rosbags' Writer (MCAP chunks closed and flushed per batch; sqlite3 in WAL
 mode, one commit per batch); ``relay`` writes finished part files byte range by byte range (split
-files, records torn at every boundary), then metadata.yaml.
+files, records torn at every boundary), then metadata.yaml; ``split-sqlite`` writes split sqlite3
+files in WAL mode.
 """
 
 from __future__ import annotations
 
 import argparse
+import sqlite3
 import sys
 import tempfile
 import time
@@ -18,6 +20,7 @@ from typing import TYPE_CHECKING
 import yaml
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
 from sample_bags import make_sample_bags as samples
 
@@ -118,10 +121,58 @@ def write_relay(
         (out / "metadata.yaml").write_text(yaml.safe_dump(meta))
 
 
+def write_split_sqlite(
+    out: Path, items: list[samples.Rec], parts: int, batches: int, delay: float
+) -> None:
+    """rosbag2's sqlite3 layout split into ``parts`` files written in WAL mode, one commit per
+    batch; each file is closed (its WAL removed) before the next, metadata.yaml last."""
+    out.mkdir()
+    names: list[str] = []
+    topics: dict[tuple[str, str], int] = {}
+    for number, part in enumerate(_batches(items, parts)):
+        names.append(f"{out.name}_{number}.db3")
+        db = sqlite3.connect(out / names[-1], isolation_level=None)
+        db.executescript(Sqlite3Writer.SQLITE_SCHEMA)
+        db.execute("PRAGMA journal_mode=WAL")
+        declared: set[tuple[str, str]] = set()
+        for batch in _batches(part, batches):
+            db.execute("BEGIN")
+            for rec in batch:
+                key = (rec.topic, rec.msgtype)
+                cid = topics.setdefault(key, len(topics) + 1)
+                if key not in declared:
+                    declared.add(key)
+                    db.execute(
+                        "INSERT INTO message_definitions (topic_type, encoding, "
+                        "encoded_message_definition, type_description_hash) "
+                        "VALUES (?, 'ros2msg', ?, '')",
+                        (rec.msgtype, samples.definition(rec.msgtype)),
+                    )
+                    db.execute(
+                        "INSERT INTO topics VALUES (?, ?, ?, 'cdr', '', '')",
+                        (cid, rec.topic, rec.msgtype),
+                    )
+                data = bytes(samples.TS.serialize_cdr(rec.msg, rec.msgtype))
+                db.execute(
+                    "INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)",
+                    (cid, rec.t_ns, data),
+                )
+            db.execute("COMMIT")
+            time.sleep(delay)
+        db.close()
+    info = {
+        "version": 9,
+        "storage_identifier": "sqlite3",
+        "relative_file_paths": names,
+        "files": [{"path": name} for name in names],
+    }
+    (out / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
-    parser.add_argument("--mode", choices=["live", "relay"], default="live")
+    parser.add_argument("--mode", choices=["live", "relay", "split-sqlite"], default="live")
     parser.add_argument("--storage", choices=["mcap", "sqlite3"], default="mcap")
     parser.add_argument("--records", choices=["nav2", "services"], default="nav2")
     parser.add_argument("--batches", type=int, default=20)
@@ -144,6 +195,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.wal_pages,
             metadata_first=args.metadata_first,
         )
+    elif args.mode == "split-sqlite":
+        items = records(args.records)
+        write_split_sqlite(args.out, items, args.parts, args.batches, args.delay)
     else:
         finish = not args.unfinished
         write_relay(args.out, args.records, args.parts, args.step, args.delay, finish, args.cut)

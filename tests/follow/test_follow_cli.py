@@ -114,6 +114,13 @@ def test_metadata_written_before_the_file_is_closed(tmp_path: Path, storage: str
     )
 
 
+def test_split_sqlite3_files_in_wal_mode(tmp_path: Path) -> None:
+    bag = tmp_path / "bag"
+    args = ["--mode", "split-sqlite", "--parts", "2", "--batches", "8", "--delay", "0.15"]
+    follow_and_compare(tmp_path, bag, args)
+    assert sorted(p.name for p in bag.iterdir()) == ["bag_0.db3", "bag_1.db3", "metadata.yaml"]
+
+
 def test_split_files_appearing_with_torn_tails(tmp_path: Path) -> None:
     bag = tmp_path / "bag"
     follow_and_compare(
