@@ -91,6 +91,12 @@ class RecordRows(Generic[_R]):
 NS_PER_SEC = 1_000_000_000
 NS_PER_MS = 1_000_000
 
+POLL_MIN_S = 0.05
+POLL_MAX_S = 5.0
+"""Bounds of ``follow``'s poll interval (seconds): fast enough to follow, slow enough to cost
+nothing; the command line checks them before the tailing input clamps to them."""
+POLL_DEFAULT_S = 0.5
+
 
 class Severity(IntEnum):
     """Fault severities with ros2_medkit_msgs/Fault's numbers."""

@@ -53,6 +53,19 @@ def test_engine_sources_never_read_a_clock() -> None:
             assert needle not in text, f"{path.name} uses {needle}"
 
 
+def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipeline() -> None:
+    # follow mode polls with time.monotonic/time.sleep in inputs/follow.py alone; what the
+    # replay computes keeps bag time (the pipeline reads no clock either).
+    root = Path(__file__).resolve().parents[1] / "medkit_replay"
+    users = sorted(
+        str(path.relative_to(root))
+        for folder in ("inputs", "pipeline")
+        for path in (root / folder).rglob("*.py")
+        if any(needle in path.read_text() for needle in ("import time", "monotonic", "sleep("))
+    )
+    assert users == ["inputs/follow.py"]
+
+
 def test_bridges_do_not_import_outputs_or_inputs() -> None:
     loaded = loaded_after("medkit_replay.bridges")
     bad = sorted(
@@ -105,6 +118,7 @@ HEAVY_AT_START = (
         ["diff", "--help"],
         ["explain", "--help"],
         ["fleet", "--help"],
+        ["follow", "--help"],
     ],
 )
 def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import sys
 from contextlib import nullcontext
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
@@ -16,45 +17,64 @@ from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
 
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from click.decorators import FC
+
+    from medkit_replay.result import Result
+
+
+def report_options(command: FC) -> FC:
+    """The options naming the report files ``analyze`` (and ``follow``) write."""
+    for option in reversed(_REPORT_OPTIONS):
+        command = option(command)
+    return command
+
+
+_REPORT_OPTIONS = (
+    click.option(
+        "--json",
+        "json_out",
+        type=str,
+        default=None,
+        help="Write the JSON report here ('-': standard output; FILE.gz or FILE.zst compressed).",
+    ),
+    click.option(
+        "--csv",
+        "csv_dir",
+        type=click.Path(path_type=Path),
+        default=None,
+        help="Write every report table as CSV into this directory.",
+    ),
+    click.option(
+        "--parquet",
+        "parquet_dir",
+        type=click.Path(path_type=Path),
+        default=None,
+        help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
+    ),
+    click.option(
+        "--mcap",
+        "mcap_out",
+        type=click.Path(path_type=Path, dir_okay=False),
+        default=None,
+        help="Write the replayed FaultEvents and status changes as an MCAP recording.",
+    ),
+    click.option(
+        "--html",
+        "html_out",
+        type=click.Path(path_type=Path, dir_okay=False),
+        default=None,
+        help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
+    ),
+)
+
 
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
 @config_option()
-@click.option(
-    "--json",
-    "json_out",
-    type=str,
-    default=None,
-    help="Write the JSON report here ('-' for standard output; FILE.gz or FILE.zst compressed).",
-)
-@click.option(
-    "--csv",
-    "csv_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Write every report table as CSV into this directory.",
-)
-@click.option(
-    "--parquet",
-    "parquet_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
-)
-@click.option(
-    "--mcap",
-    "mcap_out",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Write the replayed FaultEvents and status changes as an MCAP recording.",
-)
-@click.option(
-    "--html",
-    "html_out",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
-)
+@report_options
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
     inputs: tuple[Path, ...],
@@ -76,17 +96,10 @@ def analyze(
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
     """
     # Imported here, so that --help and the other commands start without them.
-    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
-    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
-    from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
-    chosen = [
-        (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
-    ]
-    writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
-    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
+    chosen, writers = prepare_reports(inputs, configs, json_out, targets)
     bar = None
     if not quiet:  # rich (bar and summary) is loaded only for people to read
         from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
@@ -94,6 +107,39 @@ def analyze(
         bar = progress_bar(sys.stderr)
     with bar if bar is not None else nullcontext():
         result = replay(list(inputs), list(configs), progress=bar)
+    write_reports(result, json_out, chosen, writers, quiet=quiet)
+
+
+def prepare_reports(
+    inputs: Sequence[Path],
+    configs: Sequence[Path],
+    json_out: str | None,
+    targets: dict[str, Path | None],
+) -> tuple[list[tuple[FileOutput, Path]], list[Callable[[Result, Path], object]]]:
+    """The outputs asked for (by option) and their writers, refused before any replay when an
+    optional dependency is missing or a path would land on an input or a config file."""
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
+
+    chosen = [
+        (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
+    ]
+    writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
+    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
+    return chosen, writers
+
+
+def write_reports(
+    result: Result,
+    json_out: str | None,
+    chosen: list[tuple[FileOutput, Path]],
+    writers: list[Callable[[Result, Path], object]],
+    *,
+    quiet: bool,
+) -> None:
+    """Write the JSON report and every chosen output, then the human summary (unless quiet)."""
+    from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
+
     if json_out == "-":
         with standard_output("the report"):
             write_report_stdout(result)

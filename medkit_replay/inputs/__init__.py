@@ -8,7 +8,9 @@ merge in (log time, input index, position) order. Only the topics the replay nee
 ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP
 chunks are read through their message indexes.
 Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
-can be read raises :class:`~medkit_replay.errors.InputError`.
+can be read raises :class:`~medkit_replay.errors.InputError`. A recording still being written is
+followed with ``open_recording(..., follow=Follow())``: its files are read as they grow and appear
+(``tail.py``), never locked or changed, until it is finished or the :class:`Follow` stops.
 
     with open_recording(["run_bag/"], rosout=True) as recording:
         for message in recording.messages():
@@ -16,6 +18,7 @@ can be read raises :class:`~medkit_replay.errors.InputError`.
         summaries = recording.inputs
 """
 
+from medkit_replay.inputs.follow import Follow
 from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
 from medkit_replay.inputs.selection import Role, Selection
 from medkit_replay.inputs.source import Input, InputContext, Message, Opener
@@ -23,6 +26,7 @@ from medkit_replay.msgdefs import normalize_typename
 
 __all__ = [
     "READERS",
+    "Follow",
     "Input",
     "InputContext",
     "Message",

@@ -190,6 +190,10 @@ class Db3File:
         self._counted = False
         self._bad_times: dict[int, int] = {}
         self._copy: TemporaryDirectory[str] | None = None
+        self._open(path)
+
+    def _open(self, path: Path) -> None:
+        """Check the magic and probe the database (a copy with its ``-wal`` applied, if any)."""
         try:
             with open_regular(path) as bio:
                 magic = bio.read(len(SQLITE_MAGIC))
@@ -197,7 +201,7 @@ class Db3File:
             raise NotABagError(f"cannot read: {exc.strerror or exc}") from None
         if magic != SQLITE_MAGIC:
             raise NotABagError("not an SQLite database")
-        copied = checkpointed_copy(path, warn)
+        copied = checkpointed_copy(path, self.warn)
         self._source = path
         if copied is not None:
             self._copy, self._source = copied
@@ -314,6 +318,10 @@ class Db3File:
                 self._report_bad_times(db, wanted)
         except sqlite3.Error as exc:
             self.warn(f"{self.path}: damaged database ({exc}); its messages are lost")
+        self._report_losses(losses)
+
+    def _report_losses(self, losses: dict[str, _Losses]) -> None:
+        """Warn about wanted rows skipped for their payload."""
         data, large = losses["data"], losses["large"]
         if data.count:
             self.warn(

@@ -62,6 +62,7 @@ _T_NS = itemgetter(0)  # log time of a Timed
 _SEEN_T_NS = itemgetter(1)  # log time of a (channel id, log time) pair
 LOG_TIME_LIMIT = 2**63
 """Log times at or above it cannot come from ROS 2 (int64 nanoseconds): such a message is damage."""
+NO_FOOTER = "no footer (the recorder did not close the file)"
 _new = tuple.__new__  # builds a Timed or Raw from a tuple without its Python-level __new__
 
 
@@ -187,11 +188,11 @@ class McapFile:
     def _read_footer_and_summary(self, bio: BinaryIO) -> str | None:
         footer_pos = self._size - FOOTER_SIZE
         if footer_pos < self._data_start:
-            return "no footer (the recorder did not close the file)"
+            return NO_FOOTER
         bio.seek(footer_pos)
         footer = bio.read(FOOTER_SIZE)
         if footer[-len(MAGIC) :] != MAGIC or footer[0] != OP_FOOTER:
-            return "no footer (the recorder did not close the file)"
+            return NO_FOOTER
         cur = _Cursor(footer[9:29])
         summary_start, _, summary_crc = cur.uint(8), cur.uint(8), cur.uint(4)
         self._data_end = footer_pos
@@ -510,9 +511,13 @@ class McapFile:
     def _read_linear(
         self, bio: BinaryIO, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
-        pos, end = self._data_start, self._data_end
+        pos = self._data_start
         bio.seek(pos)
-        while pos < end:
+        while pos < self._data_end or self._grow(pos + 1):
+            if pos + 9 > self._data_end:
+                self._grow(pos + 9)
+                bio.seek(pos)
+            end = self._data_end
             head = bio.read(9)
             if len(head) < 9:
                 self._truncated(pos, "a record header")
@@ -530,6 +535,10 @@ class McapFile:
                     f"{pos}; the last {self._size - pos} bytes are lost"
                 )
                 return
+            if body_end > end:
+                self._grow(body_end)
+                end = self._data_end
+                bio.seek(pos + 9)
             if body_end > end:
                 if op == OP_CHUNK and end - pos - 9 > 0:
                     yield from self._chunk(
@@ -562,6 +571,11 @@ class McapFile:
                     self.warn(f"{self.path}: damaged schema or channel at byte {pos}: {exc}")
             pos = body_end
             bio.seek(pos)
+
+    def _grow(self, need: int) -> bool:
+        """Whether the data now reaches byte ``need``; a followed file waits for its writer
+        here (:mod:`medkit_replay.inputs.mcap_tail`), a file read as it stands never grows."""
+        return need <= self._data_end
 
     def _parse_records(self, body: bytes, op: int) -> None:
         if op == OP_SCHEMA:

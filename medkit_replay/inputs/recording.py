@@ -5,6 +5,7 @@ Chooses a reader per input through READERS; the only place inputs are opened and
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,12 +16,14 @@ from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
 from medkit_replay.inputs.source import InputContext
+from medkit_replay.inputs.tail import open_tail
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Iterator
     from types import TracebackType
     from typing import Self
 
+    from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
@@ -139,6 +142,7 @@ def open_recording(
     extra_topics: Iterable[str] = (),
     only_roles: Iterable[Role] | None = None,
     use_index: bool = True,
+    follow: Follow | None = None,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
@@ -151,6 +155,8 @@ def open_recording(
         only_roles: read only topics of these roles (None: every role).
         use_index: read uncompressed MCAP chunks through their message indexes (False:
             every chunk is read whole; the messages are the same).
+        follow: read the inputs while they are written, waiting for more as it says
+            (:mod:`medkit_replay.inputs.tail`); None: read them as they stand.
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -177,7 +183,11 @@ def open_recording(
             path = Path(raw_path)
             if not path.exists():
                 raise InputError("input not found", path=str(path))
-            opener = READERS.get(input_kind(path))
+            opener = (
+                READERS.get(input_kind(path))
+                if follow is None
+                else partial(open_tail, follow=follow)
+            )
             if opener is None:
                 kinds = ", ".join(sorted(k for k in READERS if k != "dir"))
                 raise InputError(

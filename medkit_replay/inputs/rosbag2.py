@@ -255,13 +255,13 @@ class Rosbag2Input:
         except BaseException:
             self.close()
             raise
-        if not self._files:
+        if not self._files and paths:  # no paths: a followed input, its files yet to come
             self.close()
             if paths == [path]:
                 raise InputError(_one_line(problems[0]), path=str(path))
             detail = _one_line("; ".join(problems))
             raise InputError(f"nothing readable ({detail})", path=str(path))
-        self.storage = meta.storage or self._files[0].storage
+        self.storage = meta.storage or (self._files[0].storage if self._files else "")
         # No bound of file k may pass the start of a later file: split files can overlap a little.
         starts = [meta.starts.get(f.path.name, f.start_ns) for f in self._files]
         self._caps = [

@@ -36,11 +36,12 @@ from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Router, recorded_report_codes
 from medkit_replay.pipeline.tracing import Tracer
-from medkit_replay.spool import Spool
+from medkit_replay.spool import Row, Spool
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
+    from medkit_replay.inputs.follow import Follow
     from medkit_replay.result import Result
     from medkit_replay.trace import FaultTrace
 
@@ -57,6 +58,8 @@ def replay(
     progress: Callable[[Progress], None] | None = None,
     progress_every: int = PROGRESS_EVERY,
     trace: FaultTrace | None = None,
+    follow: Follow | None = None,
+    live: Callable[[Transition | FaultEvent], None] | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -73,6 +76,12 @@ def replay(
             requests and the messages behind them, held requests, correlation decisions,
             transitions, events, clears, the state at ``trace.at_offset_ns``). The Result
             does not depend on it.
+        follow: read the inputs while they are written (``medkit-replay follow``), as it
+            says; the replay ends when they are finished or it stops. Recorded ReportFault
+            codes are then learnt as they arrive; should a bridge have reported one of them
+            first, a finished recording is replayed once more as it stands (said in
+            ``follow.notes``), so the result is always that of the finished recording.
+        live: called with every transition and FaultEvent as the manager records it.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -81,6 +90,7 @@ def replay(
     if not inputs:
         raise InputError("no input given")
     paths = [Path(p) for p in inputs]
+    configs = tuple(configs)  # read twice when a followed recording is replayed again
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
     options, option_warnings = replay_options(params)
@@ -93,12 +103,18 @@ def replay(
     output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
     manager = FaultManager(manager_config, output)
     # Rows straight into the spools' tails; the loop settles them now and then.
-    manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
+    event_sink, transition_sink = events.row_sink(), transitions.row_sink()
+    if live is not None:
+        event_sink = _tee(event_sink, EVENT_ROWS.decode, live)
+        transition_sink = _tee(transition_sink, TRANSITION_ROWS.decode, live)
+    manager.set_row_sinks(reports.row_sink(), event_sink, transition_sink)
     timeline = Timeline(manager)
     router = Router(options)
     tracer = Tracer(trace, manager, router) if trace is not None else None
-    recorded_codes = recorded_report_codes(paths, progress, progress_every)
-    gate = Gate(timeline, recorded_codes)
+    recorded_codes = (
+        recorded_report_codes(paths, progress, progress_every) if follow is None else set()
+    )
+    gate = Gate(timeline, recorded_codes, learn=follow is not None)
     if tracer is not None:
         tracer.attach(gate)
     rosout = router.log is not None
@@ -108,6 +124,7 @@ def replay(
         rosout=rosout,
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
+        follow=follow,
     ) as recording:
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None
@@ -117,6 +134,20 @@ def replay(
         summaries = recording.inputs
         if meter is not None:
             meter.finish(messages, timeline.last_ns)
+    if follow is not None and gate.late_codes:
+        late = ", ".join(sorted(gate.late_codes))
+        if follow.finished:
+            follow.notes.append(
+                f"recorded ReportFault calls for {late} came after a bridge had reported "
+                "them; the report is a replay of the finished recording (the lines printed "
+                "live applied those bridge reports)"
+            )
+            return replay(inputs, configs, progress=progress, progress_every=progress_every)
+        warnings.append(
+            f"recorded ReportFault calls for {late} came after a bridge had reported them; "
+            "those bridge reports were applied (a replay of the finished recording withholds "
+            "them: rule: recorded service traffic wins per fault code)"
+        )
     for origin, count in sorted(gate.withheld.items()):
         codes = len(gate.withheld_codes[origin])
         warnings.append(
@@ -175,3 +206,17 @@ def replay(
         (events, transitions, reports, clears),
         config,
     )
+
+
+def _tee(
+    sink: Callable[[Row], None],
+    decode: Callable[[Row], Transition | FaultEvent],
+    live: Callable[[Transition | FaultEvent], None],
+) -> Callable[[Row], None]:
+    """A row sink that also hands each record, decoded, to ``live``."""
+
+    def both(row: Row) -> None:
+        sink(row)
+        live(decode(row))
+
+    return both

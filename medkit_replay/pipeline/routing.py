@@ -106,18 +106,33 @@ class Gate:
     """The double-counting rule between bridges and the manager: recorded service traffic wins.
 
     A bridge's request for a code also present in recorded ReportFault calls is withheld.
+    With ``learn`` (a recording followed while written, which cannot be scanned ahead) the
+    codes are learnt as the recorded calls arrive; ``late_codes`` are those some bridge had
+    already reported before, which the rule would have withheld.
     """
 
-    def __init__(self, timeline: Timeline, recorded_codes: set[str]) -> None:
+    def __init__(
+        self, timeline: Timeline, recorded_codes: set[str], *, learn: bool = False
+    ) -> None:
         self.timeline = timeline
         self.recorded_codes = recorded_codes
         self.withheld: Counter[str] = Counter()
         self.withheld_codes: dict[str, set[str]] = {}
         self.on_withheld: Callable[[str, str], None] | None = None
         """Told (origin, fault code) of every request held back (``explain`` listens)."""
+        self.learn = learn
+        self.bridge_codes: set[str] = set()
+        self.late_codes: set[str] = set()
         report_fields = timeline.manager.report_fields
-        self.report: ReportSink = self._report_gated if recorded_codes else report_fields
+        gated = recorded_codes or learn
+        self.report: ReportSink = self._report_gated if gated else report_fields
         self._report_fields = report_fields
+
+    def _learn(self, fault_code: str) -> None:
+        if fault_code not in self.recorded_codes:
+            self.recorded_codes.add(fault_code)
+            if fault_code in self.bridge_codes:
+                self.late_codes.add(fault_code)
 
     def _withhold(self, origin: str, fault_code: str) -> None:
         self.withheld[origin] += 1
@@ -127,6 +142,8 @@ class Gate:
 
     def apply(self, request: Request) -> None:
         """One request object (a script's, a recorded service call's)."""
+        if self.learn and request.origin == "report_fault" and isinstance(request, ReportRequest):
+            self._learn(request.fault_code)
         if request.origin in BRIDGE_ORIGINS and request.fault_code in self.recorded_codes:
             self._withhold(request.origin, request.fault_code)
         elif isinstance(request, ReportRequest):
@@ -152,6 +169,8 @@ class Gate:
         if fault_code in self.recorded_codes:
             self._withhold(origin, fault_code)
             return
+        if self.learn:
+            self.bridge_codes.add(fault_code)
         self._report_fields(
             t_ns, origin, topic, fault_code, event_type, severity, description, source_id
         )

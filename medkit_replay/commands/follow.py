@@ -1,0 +1,161 @@
+"""``medkit-replay follow``: replay a recording while it is written, printing each change live.
+
+When the recording is finished, or on Ctrl-C / SIGTERM, writes the same reports as ``analyze``.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, TextIO
+
+import click
+
+from medkit_replay.commands import config_option
+from medkit_replay.commands.analyze import prepare_reports, report_options, write_reports
+from medkit_replay.commands.streams import discard_stdout
+from medkit_replay.errors import InputError
+from medkit_replay.model import POLL_DEFAULT_S, POLL_MAX_S, POLL_MIN_S
+from medkit_replay.outputs.console import echo
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+
+    from medkit_replay.inputs.follow import Follow
+    from medkit_replay.model import FaultEvent, Transition
+
+STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
+@click.command()
+@click.argument("recording", type=click.Path(path_type=Path))
+@config_option()
+@report_options
+@click.option(
+    "--poll",
+    "poll_s",
+    type=click.FloatRange(POLL_MIN_S, POLL_MAX_S),
+    default=POLL_DEFAULT_S,
+    show_default=True,
+    help=f"Seconds between two looks at the recording ({POLL_MIN_S:g} to {POLL_MAX_S:g}).",
+)
+@click.option(
+    "--idle-timeout",
+    "idle_timeout_s",
+    type=click.FloatRange(min=0, min_open=True),
+    default=None,
+    help="Stop following (and write the reports) when nothing new arrived for this many "
+    "seconds; by default a recording that never finishes is followed until Ctrl-C.",
+)
+@click.option("--quiet", is_flag=True, help="No live lines, no human summary.")
+def follow(
+    recording: Path,
+    configs: tuple[Path, ...],
+    json_out: str | None,
+    csv_dir: Path | None,
+    parquet_dir: Path | None,
+    mcap_out: Path | None,
+    html_out: Path | None,
+    poll_s: float,
+    idle_timeout_s: float | None,
+    quiet: bool,
+) -> None:
+    """Replay RECORDING while it is being written, printing each status change and FaultEvent.
+
+    RECORDING is a rosbag2 directory (MCAP or sqlite3 storage in WAL mode, split files) or a
+    bare .mcap / .db3 file. The recording is only read, never locked or changed. When it is
+    finished (metadata.yaml written; a bare MCAP's footer), or on Ctrl-C / SIGTERM, the
+    reports are written as by 'analyze' (for a finished recording, the very same bytes).
+
+    \b
+    Examples:
+      medkit-replay follow field_test/ --config robot_params.yaml --json report.json
+      medkit-replay follow run.mcap --html report.html --idle-timeout 60
+    """
+    # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.inputs.follow import Follow  # noqa: PLC0415
+    from medkit_replay.pipeline import replay  # noqa: PLC0415
+
+    targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
+    chosen, writers = prepare_reports([recording], configs, json_out, targets)
+    control = Follow(poll_s=poll_s, idle_timeout_s=idle_timeout_s)
+    stream = sys.stderr if json_out == "-" else sys.stdout
+    with _stop_on_signals(control):
+        _wait_to_appear(recording, control)
+        echo(f"following {recording} (every {control.poll_s:g} s; Ctrl-C writes the report)\n",
+             sys.stderr)  # fmt: skip
+        result = replay(
+            [recording],
+            list(configs),
+            follow=control,
+            live=None if quiet else _printer(stream),
+        )
+    ending = (
+        "the recording is finished"
+        if control.finished
+        else f"following stopped ({control.stopped or 'interrupted'})"
+    )
+    echo(f"medkit-replay: {ending}; writing the reports\n", sys.stderr)
+    for note in control.notes:
+        echo(f"medkit-replay: note: {note}\n", sys.stderr)
+    write_reports(result, json_out, chosen, writers, quiet=quiet)
+
+
+def _wait_to_appear(recording: Path, control: Follow) -> None:
+    """Wait for a recording not created yet (the recorder may start after us)."""
+    from medkit_replay.inputs.follow import FollowStopped  # noqa: PLC0415
+
+    said = False
+    while not recording.exists():
+        if not said:
+            echo(f"waiting for {recording} to appear\n", sys.stderr)
+            said = True
+        try:
+            control.wait()
+        except FollowStopped:
+            raise InputError("input not found", path=str(recording)) from None
+
+
+def _printer(stream: TextIO) -> Callable[[Transition | FaultEvent], None]:
+    """Writes each record's line at once; a reader that went away ends the lines quietly."""
+    from medkit_replay.outputs.live import live_line  # noqa: PLC0415
+
+    gone = False
+
+    def show(record: Transition | FaultEvent) -> None:
+        nonlocal gone
+        if gone:
+            return
+        try:
+            stream.write(live_line(record) + "\n")
+            stream.flush()
+        except BrokenPipeError:
+            gone = True
+            if stream is sys.stdout:
+                discard_stdout()
+
+    return show
+
+
+@contextmanager
+def _stop_on_signals(control: Follow) -> Iterator[None]:
+    """Ctrl-C, SIGTERM and SIGHUP end the following (the reports are then written); a second
+    one interrupts at once."""
+
+    def stop(signum: int, _frame: object) -> None:
+        if control.stop_reason is not None:
+            raise KeyboardInterrupt
+        control.request_stop(f"interrupted by {signal.Signals(signum).name}")
+
+    saved: dict[int, object] = {}
+    for name in STOP_SIGNALS:
+        signum = getattr(signal, name, None)
+        if signum is not None:
+            saved[signum] = signal.signal(signum, stop)
+    try:
+        yield
+    finally:
+        for signum, handler in saved.items():
+            signal.signal(signum, handler)  # type: ignore[arg-type]  # what signal() returned
