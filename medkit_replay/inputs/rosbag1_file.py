@@ -302,7 +302,7 @@ class Bag1File:
                         payload = bytes(records[record.data_start : record.data_end])
                         batch.append(Timed(t_ns, (pos, record.data_start), Raw1(cid, payload)))
         except RecordDamageError as exc:
-            self.warn(f"{where}: {exc}; kept the {kept} messages before it")
+            self.warn(f"{where}: {exc}; the {kept} messages before it are kept")
         batch.sort(key=lambda timed: (timed.t_ns, timed.position))
         return batch
 

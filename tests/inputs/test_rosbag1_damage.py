@@ -177,7 +177,7 @@ def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path)
     messages, warnings = got
     assert len(warnings) == 1
     assert warnings[0].startswith(f"{damaged}: chunk at byte {pos}: record at byte ")
-    assert warnings[0].endswith("runs past it; kept the 1 messages before it")
+    assert warnings[0].endswith("runs past it; the 1 messages before it are kept")
     assert set(times(messages)) < set(expected)
 
 
