@@ -1,7 +1,7 @@
 """A ROS 1 bag file (format 2.0) read record by record: its bag header, index and chunks.
 
-Reads chunks in file order (an intact index only skips chunks and bounds time), so unindexed,
-truncated and damaged bags give what they hold; never writes, allocates within bounds.
+Reads chunks in file order (an intact index skips chunks, bounds time and points into plain
+chunks), so unindexed, truncated and damaged bags give what they hold; never writes; bounded.
 """
 
 from __future__ import annotations
