@@ -39,8 +39,13 @@ READERS: dict[str, Opener] = {
 
 
 def input_kind(path: Path) -> str:
-    """The READERS key for a path: ``dir`` or its lower-cased suffix."""
-    return "dir" if path.is_dir() else path.suffix.lower()
+    """The READERS key for a path: ``dir`` or its lower-cased suffix (``.bag`` for a ROS 1 bag
+    ``rosbag record`` left as ``NAME.bag.active``: still recording, or stopped unindexed)."""
+    if path.is_dir():
+        return "dir"
+    if path.name.lower().endswith(".bag.active"):
+        return ".bag"
+    return path.suffix.lower()
 
 
 class Recording:

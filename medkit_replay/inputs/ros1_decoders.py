@@ -76,29 +76,45 @@ def decode_diagnostic_array(raw: bytes) -> object:
 
 
 def _heads(raw: bytes) -> list[tuple[int, str, str, str]]:
+    # Inlined string reads: this loop runs for every status of every array. A length running
+    # past the end fails the next unpack_from, or the final check; every string is decoded, as
+    # rosbags decodes it, so that the walk refuses exactly what rosbags refuses.
+    u32 = _U32
     end = len(raw)
-    pos = _HEADER_BYTES
-    pos = _skip_string(raw, pos, end)
-    (count,) = _U32(raw, pos)
+    (size,) = u32(raw, _HEADER_BYTES)
+    pos = _HEADER_BYTES + 4 + size
+    raw[_HEADER_BYTES + 4 : pos].decode()  # frame_id
+    (count,) = u32(raw, pos)
     pos += 4
     if count > (end - pos) // _MIN_STATUS_BYTES:
         raise ValueError("more statuses than bytes")
     heads: list[tuple[int, str, str, str]] = []
-    string = _string
+    append = heads.append
     for _ in range(count):
         level = raw[pos]
-        pos += 1
-        name, pos = string(raw, pos, end)
-        message, pos = string(raw, pos, end)
-        hardware_id, pos = string(raw, pos, end)
-        (pairs,) = _U32(raw, pos)
+        (size,) = u32(raw, pos + 1)
+        start = pos + 5
+        pos = start + size
+        name = raw[start:pos].decode()
+        (size,) = u32(raw, pos)
+        start = pos + 4
+        pos = start + size
+        message = raw[start:pos].decode()
+        (size,) = u32(raw, pos)
+        start = pos + 4
+        pos = start + size
+        hardware_id = raw[start:pos].decode()
+        (pairs,) = u32(raw, pos)
         pos += 4
         if pairs > (end - pos) // _MIN_PAIR_BYTES:
             raise ValueError("more key/value pairs than bytes")
         for _ in range(2 * pairs):
-            pos = _skip_string(raw, pos, end)
+            (size,) = u32(raw, pos)
+            start = pos + 4
+            pos = start + size
+            raw[start:pos].decode()
         # rosbags decodes a ROS 1 byte signed.
-        heads.append((level - 256 if level > 127 else level, name, message, hardware_id))
+        append((level - 256 if level > 127 else level, name, message, hardware_id))
     if pos != end:
         raise ValueError("bytes left after the last status")
     return heads

@@ -65,7 +65,12 @@ class Rosbag1Input:
         self._late: tuple[int, int] = (0, 0)
         self._used = False
         try:
-            self._bag = Bag1File(path, self._warn, lambda cid: self._reader(cid) is not None)
+            self._bag = Bag1File(
+                path,
+                self._warn,
+                lambda cid: self._reader(cid) is not None,
+                indexed=ctx.use_index,
+            )
         except NotABagError as exc:
             raise InputError(str(exc), path=str(path)) from None
 

@@ -1,12 +1,13 @@
 """A ROS 1 bag file (format 2.0) read record by record: its bag header, index and chunks.
 
-Reads chunks in file order (an intact index only skips chunks and bounds time), so unindexed,
-truncated and damaged bags give what they hold; never writes, allocates within bounds.
+Reads chunks in file order (an intact index skips chunks, bounds time and points into plain
+chunks), so unindexed, truncated and damaged bags give what they hold; never writes; bounded.
 """
 
 from __future__ import annotations
 
 import os
+import struct
 from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.files import open_regular
@@ -24,6 +25,7 @@ if TYPE_CHECKING:
 INDEX_SIZE_LIMIT = 256 * 1024 * 1024
 """Largest index section (connections and chunk infos) read into memory; larger is damage."""
 _CODECS = {"none": "", "bz2": "bz2", "lz4": "lz4"}
+_INDEX_ENTRY = struct.Struct("<III").unpack_from  # time (sec, nsec), offset in the chunk
 
 
 class Raw1(NamedTuple):
@@ -42,7 +44,12 @@ class Bag1File:
     """
 
     def __init__(
-        self, path: Path, warn: Callable[[str], None], wants: Callable[[int], bool]
+        self,
+        path: Path,
+        warn: Callable[[str], None],
+        wants: Callable[[int], bool],
+        *,
+        indexed: bool = True,
     ) -> None:
         """Open and probe the bag.
 
@@ -50,6 +57,9 @@ class Bag1File:
             path: the ``.bag`` file.
             warn: told each loss or oddity (without the path).
             wants: whether a connection's messages are read; asked when first needed.
+            indexed: read the wanted records of an uncompressed chunk through the index data
+                records after it (False: every chunk is read whole, the route the index must
+                agree with).
 
         Raises:
             NotABagError: the file is not a ROS 1 bag of format 2.0, or its bag header is
@@ -59,6 +69,7 @@ class Bag1File:
         self.path = path
         self.warn = warn
         self._wants = wants
+        self._indexed = indexed
         self._file: IO[bytes] | None = open_regular(path)
         self._size = os.fstat(self._file.fileno()).st_size
         self.connections: dict[int, rec.Ros1Connection] = {}
@@ -225,12 +236,86 @@ class Bag1File:
                 if pos in floors:
                     yield Bound(floors[pos])
                 if self._needed(pos):
-                    batch = self._chunk(pos, compression, size, start, end)
+                    batch = None
+                    if self._indexed and compression == "none" and pos in self._chunks:
+                        batch = self._by_index(pos, size, start, end)
+                    if batch is None:
+                        batch = self._chunk(pos, compression, size, start, end)
                     if batch:
                         if pos not in floors:
                             yield Bound(batch[0].t_ns)
                         yield batch
             pos = end
+
+    def _by_index(self, pos: int, size: int, start: int, end: int) -> list[Timed[Raw1]] | None:
+        """An uncompressed chunk's wanted messages read through its index data records, or None
+        when anything disagrees (the chunk is then read whole, and any damage said there).
+
+        A record runs to the next indexed offset; runs of wanted records are read in one piece,
+        the records between them (camera frames) never.
+        """
+        offsets = self._index_data(pos, end, size) if size == end - start else None
+        if offsets is None:
+            return None
+        starts = sorted(offsets)
+        following = dict(zip(starts, [*starts[1:], size], strict=True))
+        wanted = [o for o in starts if self._wants(offsets[o][0])]
+        batch: list[Timed[Raw1]] = []
+        k = 0
+        while k < len(wanted):
+            first = last = wanted[k]
+            k += 1
+            while k < len(wanted) and wanted[k] == following[last]:
+                last = wanted[k]
+                k += 1
+            stop = following[last]
+            block = memoryview(self._read_at(start + first, stop - first))
+            at = 0
+            try:
+                for record in rec.chunk_records(block):
+                    offset, at = first + at, record.data_end
+                    if record.op != rec.OP_MSG_DATA:
+                        continue
+                    cid = rec.uint32(record.fields, "conn")
+                    t_ns = rec.time_ns(record.fields, "time")
+                    if offsets.get(offset) != (cid, t_ns) or not self._wants(cid):
+                        return None
+                    payload = bytes(block[record.data_start : record.data_end])
+                    batch.append(Timed(t_ns, (pos, first + record.data_start), Raw1(cid, payload)))
+            except RecordDamageError:
+                return None
+        if len(batch) != len(wanted):
+            return None
+        batch.sort(key=lambda timed: (timed.t_ns, timed.position))
+        return batch
+
+    def _index_data(self, pos: int, end: int, size: int) -> dict[int, tuple[int, int]] | None:
+        """The index data records after a chunk: each message's offset in the chunk, with its
+        connection and log time; None unless they agree with the chunk info and each other."""
+        expected = self._chunks[pos].counts
+        found: dict[int, tuple[int, int]] = {}
+        seen: dict[int, int] = {}
+        at = end
+        try:
+            while len(seen) < len(expected):
+                fields, data_start, data_end = self._record_at(at)
+                if rec.op_of(fields) != rec.OP_INDEX_DATA or rec.uint32(fields, "ver") != 1:
+                    return None
+                cid, count = rec.uint32(fields, "conn"), rec.uint32(fields, "count")
+                known = cid in self.connections and cid not in seen
+                if not known or data_end - data_start != 12 * count:
+                    return None
+                seen[cid] = count
+                data = self._read_at(data_start, data_end - data_start)
+                for k in range(count):
+                    sec, nsec, offset = _INDEX_ENTRY(data, 12 * k)
+                    if offset >= size or offset in found:
+                        return None
+                    found[offset] = (cid, sec * 1_000_000_000 + nsec)
+                at = data_end
+        except (RecordDamageError, EOFError):
+            return None
+        return found if seen == expected else None
 
     def _needed(self, pos: int) -> bool:
         """Whether a chunk may hold a wanted message (all do, without an index)."""
@@ -302,7 +387,7 @@ class Bag1File:
                         payload = bytes(records[record.data_start : record.data_end])
                         batch.append(Timed(t_ns, (pos, record.data_start), Raw1(cid, payload)))
         except RecordDamageError as exc:
-            self.warn(f"{where}: {exc}; kept the {kept} messages before it")
+            self.warn(f"{where}: {exc}; the {kept} messages before it are kept")
         batch.sort(key=lambda timed: (timed.t_ns, timed.position))
         return batch
 

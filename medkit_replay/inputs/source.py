@@ -40,8 +40,8 @@ class InputContext(NamedTuple):
     """What an input needs from the recording that opens it.
 
     Attributes:
-        use_index: read uncompressed MCAP chunks through their message indexes (False:
-            every chunk is read whole, the route the index must agree with).
+        use_index: read uncompressed MCAP and ROS 1 bag chunks through their message indexes
+            (False: every chunk is read whole, the route the index must agree with).
     """
 
     input_index: int

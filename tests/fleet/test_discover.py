@@ -148,3 +148,10 @@ def test_root_of_unknown_kind_is_an_input_error(tmp_path: Path) -> None:
 
 def test_empty_folder_finds_nothing(tmp_path: Path) -> None:
     assert discover([tmp_path]) == []
+
+
+def test_ros1_bags_are_recordings_also_while_active(tmp_path: Path) -> None:
+    (tmp_path / "robot").mkdir()
+    for name in ("a.bag", "b.bag.active", "c.active", "d.bag.orig"):
+        (tmp_path / "robot" / name).write_bytes(b"")
+    assert [p.name for p in discover([tmp_path])] == ["a.bag", "b.bag.active"]

@@ -388,3 +388,59 @@ def test_a_type_recorded_with_another_md5sum_is_decoded_with_a_warning(tmp_path:
         "'0123456789abcdef0123456789abcdef', not the standard one; decoded with the standard "
         "definition"
     ]
+
+
+# -- uncompressed chunks read through their index data ------------------------------------------
+
+
+def big_frames(count: int = 60) -> list[Rec1]:
+    """Diagnostics and logs between large unread messages, as a camera-heavy bag holds them."""
+    recs: list[Rec1] = []
+    for k in range(count):
+        t = T + k * 10**8
+        recs += [string1(t, "/camera", "x" * 20_000), diag1(t + 1, f"s{k}", k % 3)]
+        recs += [diag1(t + 2, f"t{k}")] if k % 2 else [log1(t + 2, ERROR, f"line {k}")]
+    return recs
+
+
+def read_counting(path: Path, monkeypatch: pytest.MonkeyPatch, *, use_index: bool) -> Any:
+    from medkit_replay.inputs.rosbag1_file import Bag1File  # noqa: PLC0415
+
+    total = [0]
+    original = Bag1File._read_at
+
+    def counting(self: Bag1File, pos: int, size: int) -> bytes:
+        data = original(self, pos, size)
+        total[0] += len(data)
+        return data
+
+    monkeypatch.setattr(Bag1File, "_read_at", counting)
+    messages, warnings = read(path, rosout=True, use_index=use_index)
+    return normalised(messages), warnings, total[0]
+
+
+def test_uncompressed_chunks_are_read_through_their_index(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bag = write_bag1(tmp_path / "frames.bag", big_frames(), chunk_bytes=100_000)
+    indexed, warnings, indexed_bytes = read_counting(bag, monkeypatch, use_index=True)
+    whole, whole_warnings, whole_bytes = read_counting(bag, monkeypatch, use_index=False)
+    assert (indexed, warnings) == (whole, whole_warnings)
+    assert len(indexed) == 120
+    assert whole_bytes > bag.stat().st_size * 0.9
+    assert indexed_bytes < bag.stat().st_size * 0.1  # the frames are never read
+
+
+def test_damaged_index_data_falls_back_to_the_whole_chunk(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tests.inputs.ros1_builders import patched, records  # noqa: PLC0415
+
+    bag = write_bag1(tmp_path / "frames.bag", big_frames(), chunk_bytes=100_000)
+    expected = read_counting(bag, monkeypatch, use_index=False)[:2]
+    index_data = [r for r in records(bag) if r.op == 0x04]
+    for k, record in enumerate(index_data[:12]):
+        # An entry's offset (its last 4 bytes), then its time, pointed elsewhere.
+        for where in (record.data_start + 8, record.data_start + 4):
+            damaged = patched(bag, tmp_path / f"idx_{k}_{where}.bag", where, b"\x10\x00\x00\x00")
+            assert read_counting(damaged, monkeypatch, use_index=True)[:2] == expected

@@ -177,7 +177,7 @@ def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path)
     messages, warnings = got
     assert len(warnings) == 1
     assert warnings[0].startswith(f"{damaged}: chunk at byte {pos}: record at byte ")
-    assert warnings[0].endswith("runs past it; kept the 1 messages before it")
+    assert warnings[0].endswith("runs past it; the 1 messages before it are kept")
     assert set(times(messages)) < set(expected)
 
 
@@ -330,3 +330,17 @@ def test_the_service_call_pre_pass_reads_no_chunk(tmp_path: Path) -> None:
     with open_recording([cut]) as recording:
         list(recording.messages())
         assert [w for w in recording.warnings if f"chunk at byte {pos}" in w]
+
+
+def test_a_bag_left_active_by_its_recorder_is_read(tmp_path: Path) -> None:
+    """``rosbag record`` writes NAME.bag.active and renames it when done; a crash leaves it so."""
+    bag = good_bag(tmp_path)
+    active = unindexed(bag, tmp_path / "run_3.bag.active")
+    got = attempt(active)
+    assert not isinstance(got, InputError)
+    messages, warnings = got
+    assert times(messages) == times(full(bag))
+    assert warnings == [
+        f"{active}: not indexed (the recorder stopped before writing its index?); "
+        "its chunks are scanned"
+    ]
