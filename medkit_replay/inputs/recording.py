@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import merge
-from medkit_replay.inputs.rosbag1 import open_bag1
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
@@ -27,6 +26,13 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
+
+def open_bag1(path: Path, ctx: InputContext) -> Input:
+    """Open a ROS 1 bag; its reader (and the ROS 1 type store) loads with the first one."""
+    from medkit_replay.inputs.rosbag1 import open_bag1 as open_ros1  # noqa: PLC0415
+
+    return open_ros1(path, ctx)
+
 
 READERS: dict[str, Opener] = {
     "dir": open_directory,
