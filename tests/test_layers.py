@@ -83,9 +83,12 @@ ALLOWED: dict[str, set[str]] = {
     "bridges": {"model", "engine"},
     "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs"},
     # config reads parameters into the settings types of the layers it configures.
-    "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges"},
+    "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges", "evidence"},
+    # evidence plans captures from a Result's records and reads them back from the inputs.
+    "evidence": NEUTRAL | {"files", "yaml_bounds", "inputs", "msgdefs"},
     "parity": {"model", "bridges", "config"},
-    "pipeline": NEUTRAL | {"spool", "result", "parity", "engine", "bridges", "inputs", "config"},
+    "pipeline": NEUTRAL
+    | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "evidence"},
     "outputs": NEUTRAL | {"result", "files", "msgdefs"},
     "msgdefs": NEUTRAL,
     "checks": NEUTRAL | {"result", "files", "yaml_bounds", "outputs"},
