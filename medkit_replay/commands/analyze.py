@@ -15,6 +15,7 @@ from medkit_replay.commands import config_option
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import MedkitReplayError
+from medkit_replay.evidence import EvidenceOptions, load_graph
 from medkit_replay.outputs import OUTPUTS, FileOutput
 from medkit_replay.outputs.atomic import atomic_text, refuse_overlap
 from medkit_replay.outputs.json_report import write_json
@@ -61,6 +62,26 @@ from medkit_replay.pipeline import replay
     default=None,
     help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
 )
+@click.option(
+    "--graph",
+    "graph_file",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="The robot's node graph (YAML node -> publishers/subscribers, or `ros2 node info` "
+    "text): entity-default freeze frames and entity-scoped recordings need it.",
+)
+@click.option(
+    "--evidence",
+    "evidence_dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=None,
+    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder.",
+)
+@click.option(
+    "--evidence-all",
+    is_flag=True,
+    help="With --evidence: also write the recordings the live manager would have deleted.",
+)
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
     inputs: tuple[Path, ...],
@@ -70,6 +91,9 @@ def analyze(
     parquet_dir: Path | None,
     mcap_out: Path | None,
     html_out: Path | None,
+    graph_file: Path | None,
+    evidence_dir: Path | None,
+    evidence_all: bool,
     quiet: bool,
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
@@ -80,16 +104,27 @@ def analyze(
       medkit-replay analyze run.jsonl --json - --quiet
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
+      medkit-replay analyze mission/ --config capture.yaml --graph graph.txt --evidence clips/
     """
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
     chosen = [
         (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
-    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
+    if evidence_all and evidence_dir is None:
+        raise click.UsageError("--evidence-all needs --evidence DIR")
+    sacred = [*inputs, *config_files(configs)]
+    refuse_overlap(sacred, _output_paths(json_out, chosen))
+    if evidence_dir is not None:
+        refuse_inside_inputs(evidence_dir, inputs)
+    evidence = EvidenceOptions(
+        graph=load_graph(graph_file) if graph_file is not None else None,
+        directory=evidence_dir,
+        everything=evidence_all,
+    )
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
-        result = replay(list(inputs), list(configs), progress=bar)
+        result = replay(list(inputs), list(configs), progress=bar, evidence=evidence)
     if json_out == "-":
         with standard_output("the report"):
             write_json(result, sys.stdout)
@@ -114,6 +149,19 @@ def analyze(
         else:
             with standard_output("the summary"):
                 print_summary(result, sys.stdout)
+
+
+def refuse_inside_inputs(directory: Path, inputs: tuple[Path, ...]) -> None:
+    """Inputs are sacred: recordings are never written into (or over) an input."""
+    target = directory.resolve()
+    for path in inputs:
+        held = path.resolve()
+        folder = held if held.is_dir() else held.parent
+        if target == held or (held.is_dir() and target.is_relative_to(folder)):
+            raise MedkitReplayError(
+                f"--evidence would write into the input {path}; choose another folder",
+                path=str(directory),
+            )
 
 
 def _output_paths(

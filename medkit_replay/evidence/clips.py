@@ -4,8 +4,8 @@ byte for byte (types, definitions, log times) into a rosbag2 folder; never decod
 
 from __future__ import annotations
 
+import contextlib
 import shutil
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rosbags.rosbag2 import StoragePlugin, Writer
@@ -17,8 +17,9 @@ from medkit_replay.msgdefs import DefinitionError
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from pathlib import Path
 
-    from rosbags.rosbag2.writer import Connection
+    from rosbags.interfaces import Connection
 
     from medkit_replay.evidence.plan import PlannedRecording
     from medkit_replay.evidence.source import EvidenceSource, RawMessage, TopicInfo
@@ -144,7 +145,5 @@ class _ClipWriter:
 
 
 def _remove_if_empty(directory: Path) -> None:
-    try:
+    with contextlib.suppress(OSError):
         directory.rmdir()
-    except OSError:
-        pass

@@ -51,7 +51,9 @@ def sample(
             raise
         except (DefinitionError, Exception):  # upstream logs and skips an undecodable topic
             continue
-        taken.append(SnapshotTopic(topic=topic, message_type=info.type, message_t_ns=message.t_ns, data=data))
+        taken.append(
+            SnapshotTopic(topic=topic, message_type=info.type, message_t_ns=message.t_ns, data=data)
+        )
     return tuple(taken)
 
 

@@ -67,7 +67,9 @@ def _from_node_info(text: str, path: str) -> NodeGraph:
         if not line[0].isspace():
             name = line.strip()
             if not name.startswith("/"):
-                raise ConfigError(f"expected a node name (/ns/node), found {name[:60]!r}", path=path, line=number)
+                raise ConfigError(
+                    f"expected a node name (/ns/node), found {name[:60]!r}", path=path, line=number
+                )
             node, section = name, None
             pubs.setdefault(node, set())
             subs.setdefault(node, set())
@@ -121,7 +123,9 @@ def _from_yaml(text: str, path: str) -> NodeGraph:
         if unknown:
             raise ConfigError(f"node {name!r}: unknown key {unknown[0]!r}", path=path)
         pubs[name] = set().union(*(_topics(entry[k], path, name) for k in _PUBLISHED if k in entry))
-        subs[name] = set().union(*(_topics(entry[k], path, name) for k in _SUBSCRIBED if k in entry))
+        subs[name] = set().union(
+            *(_topics(entry[k], path, name) for k in _SUBSCRIBED if k in entry)
+        )
     return _graph(pubs, subs)
 
 

@@ -162,7 +162,12 @@ def plan_evidence(
             if topics:
                 capture_seq += 1
                 capture = PlannedCapture(
-                    code, capture_seq, t_ns, topics, config.background_capture and not entity, entity
+                    code,
+                    capture_seq,
+                    t_ns,
+                    topics,
+                    config.background_capture and not entity,
+                    entity,
                 )
                 plan.captures.append(capture)
                 plan.steps.append(Step(t_ns, code, capture))

@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from rosbags.interfaces import Nodetype
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from rosbags.interfaces.typing import FieldDesc
     from rosbags.typesys.store import Typestore
 
@@ -73,8 +75,8 @@ def _value(store: Typestore, desc: FieldDesc, value: object) -> object:
         assert isinstance(rest, str)
         return render(store, rest, value)
     if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
-        item_desc = rest[0]  # type: ignore[index]
-        items = [_value(store, item_desc, item) for item in value]  # type: ignore[attr-defined]
+        item_desc = cast("FieldDesc", rest[0])
+        items = [_value(store, item_desc, item) for item in cast("Iterable[object]", value)]
         return items or None
     typename = rest[0] if isinstance(rest, tuple) else rest
     return _base(str(typename), value)

@@ -120,9 +120,7 @@ def node_key(source: str, *, ros_only: bool) -> str | None:
 def entity_snapshot_topics(graph: NodeGraph, sources: Iterable[str]) -> tuple[str, ...]:
     """Topics the reporting node(s) publish, minus /rosout and /parameter_events, first 16."""
     nodes = {key for s in sources if (key := node_key(s, ros_only=True)) is not None}
-    topics = sorted(
-        {t for node in nodes for t in graph.published(node) if t not in ALWAYS_SKIPPED}
-    )
+    topics = sorted({t for node in nodes for t in graph.published(node) if t not in ALWAYS_SKIPPED})
     return tuple(topics[:ENTITY_TOPIC_CAP])
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 import heapq
 import sqlite3
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
 from mcap.exceptions import McapError
@@ -20,6 +19,7 @@ from medkit_replay.msgdefs import Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Iterator
+    from pathlib import Path
     from typing import IO
 
 _INT64_MAX = 2**63 - 1
@@ -130,7 +130,7 @@ class _Db3File(_File):
         marks = ",".join("?" * len(by_id))
         order = "DESC" if reverse else "ASC"
         rows = self.db.execute(
-            f"SELECT timestamp, topic_id, data FROM messages WHERE topic_id IN ({marks}) "  # noqa: S608
+            f"SELECT timestamp, topic_id, data FROM messages WHERE topic_id IN ({marks}) "
             f"AND timestamp BETWEEN ? AND ? ORDER BY timestamp {order}, id {order}",
             (*by_id, start_ns, end_ns),
         )
@@ -207,6 +207,8 @@ class EvidenceSource:
             file.close()
 
 
-def _keyed(stream: Iterator[RawMessage], number: int) -> Iterator[tuple[tuple[int, int], RawMessage]]:
+def _keyed(
+    stream: Iterator[RawMessage], number: int
+) -> Iterator[tuple[tuple[int, int], RawMessage]]:
     for message in stream:
         yield (message.t_ns, number), message
