@@ -97,7 +97,18 @@ ALLOWED: dict[str, set[str]] = {
     "fleet": NEUTRAL | {"result", "files", "inputs", "config", "pipeline", "checks", "outputs"},
     "pytest_plugin": NEUTRAL | {"result", "pipeline", "checks", "diffing", "outputs"},
     "commands": NEUTRAL
-    | {"result", "files", "inputs", "config", "pipeline", "checks", "diffing", "fleet", "outputs"},
+    | {
+        "result",
+        "files",
+        "inputs",
+        "config",
+        "pipeline",
+        "checks",
+        "diffing",
+        "fleet",
+        "outputs",
+        "evidence",
+    },
     "cli": {"commands", "errors", "outputs", "version"},
     "__init__": {"errors", "version", "pipeline", "result", "outputs"},
 }
