@@ -117,7 +117,14 @@ def _gather(
         target = directory / recording.name if write and directory is not None else None
         try:
             recordings.append(
-                evidence_recording(recording, plan.subscribed, source, target, config.rosbag.format)
+                evidence_recording(
+                    recording,
+                    plan.subscribed,
+                    source,
+                    target,
+                    config.rosbag.format,
+                    config.rosbag.max_bag_size_mb * 1024 * 1024,
+                )
             )
         except OSError as err:
             raise MedkitReplayError(

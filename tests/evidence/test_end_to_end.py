@@ -251,3 +251,26 @@ def test_the_camera_is_never_decoded_for_a_recording(run: Run) -> None:
     _, report, _ = run
     assert all(t["topic"] != "/camera/image_raw" for r in report["recordings"] for t in r["topics"])
     assert CAMERA_BYTES > 65536
+
+
+def test_max_bag_size_splits_a_recording_into_files(tmp_path: Path) -> None:
+    robot = write_robot(tmp_path)
+    config = write_config(tmp_path)
+    text = config.read_text().replace(
+        "        topics: all\n",
+        "        topics: all\n        exclude_sensor_topics: false\n        max_bag_size_mb: 1\n",
+    )
+    config.write_text(text)
+    out, evidence = tmp_path / "r.json", tmp_path / "evidence"
+    argv = ["analyze", str(robot.bag), str(robot.script), "--config", str(config)]
+    assert main([*argv, "--evidence", str(evidence), "--json", str(out), "--quiet"]) == 0
+    kept = json.loads(out.read_text())["recordings"][2]
+    folder = Path(kept["path"])
+    files = sorted(p.name for p in folder.glob("*.mcap"))
+    assert len(files) >= 6  # 30 camera frames of 230 kB in 1 MB files
+    assert files[0] == f"{folder.name}_0.mcap"
+    topics = {"/odom", "/battery", "/tf", "/camera/image_raw"}
+    with Reader(folder) as reader:
+        copied = [(c.topic, t, bytes(raw)) for c, t, raw in reader.messages()]
+        assert reader.message_count == kept["messages"] == len(copied)
+    assert copied == _messages(robot.bag, topics, at(20), at(26))
