@@ -42,8 +42,8 @@ CAPTURE = (
 )
 
 
-def run(bag: Path, config: Path, report: Path, extra: list[str]) -> tuple[float, int]:
-    """Wall seconds and peak RSS (kB) of one analyze in a fresh process."""
+def run(bag: Path, config: Path, report: Path, extra: list[str]) -> tuple[float, float, int]:
+    """Wall seconds, CPU seconds and peak RSS (kB) of one analyze in a fresh process."""
     command = [
         time_binary(),
         "-v",
@@ -64,15 +64,21 @@ def run(bag: Path, config: Path, report: Path, extra: list[str]) -> tuple[float,
         raise SystemExit(f"analyze failed ({done.returncode}):\n{done.stderr}")
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", done.stderr)
     wall = re.search(r"Elapsed \(wall clock\) time .*: (?:(\d+):)?(\d+):([\d.]+)", done.stderr)
-    if rss is None or wall is None:
+    user = re.search(r"User time \(seconds\): ([\d.]+)", done.stderr)
+    system = re.search(r"System time \(seconds\): ([\d.]+)", done.stderr)
+    if rss is None or wall is None or user is None or system is None:
         raise SystemExit(f"unexpected /usr/bin/time output:\n{done.stderr}")
     hours, minutes, seconds = wall.groups()
-    return int(hours or 0) * 3600 + int(minutes) * 60 + float(seconds), int(rss[1])
+    elapsed = int(hours or 0) * 3600 + int(minutes) * 60 + float(seconds)
+    return elapsed, float(user[1]) + float(system[1]), int(rss[1])
 
 
-def best(bag: Path, config: Path, report: Path, extra: list[str], repeat: int) -> tuple[float, int]:
+def best(
+    bag: Path, config: Path, report: Path, extra: list[str], repeat: int
+) -> tuple[float, float, int]:
+    """The fastest of ``repeat`` runs (wall), with the least CPU time and peak RSS seen."""
     runs = [run(bag, config, report, extra) for _ in range(repeat)]
-    return min(runs)
+    return min(r[0] for r in runs), min(r[1] for r in runs), max(r[2] for r in runs)
 
 
 def main() -> None:

@@ -182,10 +182,15 @@ def plan_evidence(
             "--graph FILE to capture them (capture ids assume they captured nothing)"
         )
     if bag.unscoped:
+        why = (
+            "pass --graph FILE to scope them"
+            if graph is None
+            else "their reporting nodes publish or subscribe nothing recorded in the node graph"
+        )
         plan.notes.append(
             f"{len(bag.unscoped)} recording(s) in entity mode hold every subscribed topic "
             "(upstream's fallback when the faulting node's topics are unknown): "
-            f"{', '.join(bag.unscoped)}; pass --graph FILE to scope them"
+            f"{', '.join(bag.unscoped)}; {why}"
         )
     return plan
 
@@ -251,8 +256,7 @@ class _BlackBox:
         scope = self._entity_topics(code, t_ns)
         if scope is not None and not scope and self.config.topics == "entity":
             scope = None
-            if self.graph is None:
-                self.unscoped.append(code)
+            self.unscoped.append(code)
         start = max(t_ns - self.before_ns, self.buffer_from)
         buffered = start <= t_ns and self.probe(self.plan.subscribed, start, t_ns)
         if not buffered and self.after_ns <= 0:
