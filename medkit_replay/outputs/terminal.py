@@ -328,13 +328,16 @@ def _evidence(result: Result, clock: _Clock) -> Group | None:
         line.append(f"  capture {capture.capture_id}: {topics}")
         lines.append(Padding(line, (0, 0, 0, 2)))
     for recording in recordings[:MAX_EVIDENCE_LINES]:
-        line = Text(f"{clock.offset(recording.start_ns)} to {clock.offset(recording.end_ns)}  ")
+        line = Text(f"{clock.offset(recording.start_ns)}-{clock.offset(recording.end_ns)}  ")
         line.append(_show(recording.recording_id), style="bold")
-        line.append(f"  {_plural(recording.messages, 'message')}, {recording.bytes} B")
-        if recording.deleted_reason is not None:
-            line.append(f"  deleted at {clock.offset(recording.deleted_ns or 0)}: ")
-            line.append(_show(recording.deleted_reason), style="yellow")
+        size = recording.bytes
+        shown = f"{size} B" if size < 1000 else f"{size / 1000:.1f} kB"
+        line.append(f"  {recording.messages} msg, {shown}")
         lines.append(Padding(line, (0, 0, 0, 2)))
+        if recording.deleted_reason is not None:
+            gone = Text(f"deleted at {clock.offset(recording.deleted_ns or 0)}: ", style="yellow")
+            gone.append(_show(recording.deleted_reason))
+            lines.append(Padding(gone, (0, 0, 0, 4)))
     hidden = max(len(captures) - MAX_EVIDENCE_LINES, 0) + max(
         len(recordings) - MAX_EVIDENCE_LINES, 0
     )
