@@ -98,18 +98,32 @@ class Plan:
 
 
 class _Sources:
-    """Each fault's reporting sources as they grew (upstream never forgets one)."""
+    """Each fault's reporting sources as they grew (upstream never forgets one).
+
+    The reports are read on first use only: only entity scope (with a node graph) needs them,
+    and reading a long replay's spooled reports back costs seconds.
+    """
 
     def __init__(self, reports: Iterable[ReportRecord]) -> None:
-        self.first: dict[str, dict[str, int]] = {}
-        for report in reports:
-            if report.accepted:
-                self.first.setdefault(report.fault_code, {}).setdefault(
-                    report.source_id, report.t_ns
-                )
+        self.reports = reports
+        self.first: dict[str, dict[str, int]] | None = None
 
     def at(self, code: str, t_ns: int) -> list[str]:
+        if self.first is None:
+            self.first = {}
+            for report in self.reports:
+                if report.accepted:
+                    self.first.setdefault(report.fault_code, {}).setdefault(
+                        report.source_id, report.t_ns
+                    )
         return sorted(s for s, t in self.first.get(code, {}).items() if t <= t_ns)
+
+
+def _listed(codes: Iterable[str], limit: int = 20) -> str:
+    """Codes for a note: the first ``limit`` in order, then how many more."""
+    unique = sorted(set(codes))
+    shown = ", ".join(unique[:limit])
+    return shown + (f" and {len(unique) - limit} more" if len(unique) > limit else "")
 
 
 def plan_evidence(
@@ -175,11 +189,10 @@ def plan_evidence(
             bag.confirmed(code, t_ns)
     bag.advance(None)
     if no_graph:
-        codes = sorted(set(no_graph))
         plan.notes.append(
             f"{len(no_graph)} freeze-frame capture(s) would use entity-default topics (the topics "
-            f"the reporting node publishes), which need the node graph: {', '.join(codes)}; pass "
-            "--graph FILE to capture them (capture ids assume they captured nothing)"
+            f"the reporting node publishes), which need the node graph: {_listed(no_graph)}; "
+            "pass --graph FILE to capture them (capture ids assume they captured nothing)"
         )
     if bag.unscoped:
         why = (
@@ -190,7 +203,7 @@ def plan_evidence(
         plan.notes.append(
             f"{len(bag.unscoped)} recording(s) in entity mode hold every subscribed topic "
             "(upstream's fallback when the faulting node's topics are unknown): "
-            f"{', '.join(bag.unscoped)}; {why}"
+            f"{_listed(bag.unscoped)}; {why}"
         )
     return plan
 

@@ -15,6 +15,7 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 
 from medkit_replay.files import open_regular
+from medkit_replay.inputs.decompress import MAX_RATIO, RATIO_SLACK
 from medkit_replay.msgdefs import Definition, normalize_typename
 
 if TYPE_CHECKING:
@@ -45,6 +46,7 @@ class TopicInfo:
 class _File:
     """One storage file: its topics and ranged reads."""
 
+    path: Path
     topics: dict[str, TopicInfo]
 
     def read(
@@ -58,12 +60,29 @@ class _File:
 
 class _McapFile(_File):
     def __init__(self, path: Path) -> None:
+        self.path = path
         self.stream: IO[bytes] = open_regular(path)
+        try:
+            self._index()
+        except BaseException:
+            self.stream.close()
+            raise
+
+    def _index(self) -> None:
         self.reader = SeekingReader(self.stream, validate_crcs=False)
         summary = self.reader.get_summary()
         self.topics = {}
         if summary is None:
-            return
+            raise ValueError("no summary section (a truncated file?)")
+        for chunk in summary.chunk_indexes:
+            ratio = MAX_RATIO.get(chunk.compression)
+            if ratio is not None and chunk.uncompressed_size > (
+                chunk.compressed_size * ratio + RATIO_SLACK
+            ):
+                raise ValueError(
+                    f"a chunk at byte {chunk.chunk_start_offset} declares "
+                    f"{chunk.uncompressed_size} bytes it cannot hold"
+                )
         for channel in summary.channels.values():
             schema = summary.schemas.get(channel.schema_id)
             if schema is None or channel.message_encoding != "cdr":
@@ -98,10 +117,21 @@ class _McapFile(_File):
 
 class _Db3File(_File):
     def __init__(self, path: Path) -> None:
+        wal = path.with_name(path.name + "-wal")
+        if wal.exists() and wal.stat().st_size > 0:
+            raise ValueError("in WAL mode (frames not checkpointed)")
+        self.path = path
         uri = path.resolve().as_uri() + "?mode=ro&immutable=1"
         self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
         self.ids: dict[str, int] = {}
         self.topics = {}
+        try:
+            self._index()
+        except BaseException:
+            self.db.close()
+            raise
+
+    def _index(self) -> None:
         definitions: dict[str, Definition] = {}
         tables = {r[0] for r in self.db.execute("SELECT name FROM sqlite_master")}
         if "message_definitions" in tables:
@@ -142,11 +172,13 @@ class _Db3File(_File):
 
 
 def storage_files(path: Path) -> list[Path]:
-    """The MCAP and sqlite3 files of one input (a rosbag2 folder or a bare file)."""
+    """The storage files of one input (a rosbag2 folder or a bare file); a compressed one
+    (``.zstd``) is listed too, and refused when opened."""
+    wanted = (".mcap", ".db3", ".zstd")
     if path.is_dir():
-        found = [p for p in path.iterdir() if p.suffix in (".mcap", ".db3") and p.is_file()]
+        found = [p for p in path.iterdir() if p.suffix.lower() in wanted and p.is_file()]
         return sorted(found, key=lambda p: p.name)
-    return [path] if path.suffix.lower() in (".mcap", ".db3") else []
+    return [path] if path.suffix.lower() in wanted else []
 
 
 class EvidenceSource:
@@ -164,20 +196,33 @@ class EvidenceSource:
         for path in inputs:
             for file in storage_files(path):
                 try:
+                    if file.suffix.lower() == ".zstd":
+                        raise ValueError("file-compressed storage")
                     opened: _File = (
                         _McapFile(file) if file.suffix.lower() == ".mcap" else _Db3File(file)
                     )
                 except (OSError, McapError, sqlite3.Error, ValueError, KeyError) as err:
-                    self.skipped.append(f"{file}: {err}")
+                    self.skipped.append(f"{file}: not read for evidence: {err}")
                     continue
                 self.files.append(opened)
                 for topic, info in opened.topics.items():
                     self.topics.setdefault(topic, info)
 
+    def _guarded(self, file: _File, stream: Iterator[RawMessage]) -> Iterator[RawMessage]:
+        """A file's messages until it turns out damaged; the damage is noted once."""
+        try:
+            yield from stream
+        except ImportError:
+            raise
+        except Exception as err:  # mcap and sqlite3 raise many kinds on damaged bytes
+            note = f"{file.path}: stopped reading evidence at damage ({err})"
+            if note not in self.skipped:
+                self.skipped.append(note)
+
     def read(self, topics: Iterable[str], start_ns: int, end_ns: int) -> Iterator[RawMessage]:
         """Messages on ``topics`` with log time in [start_ns, end_ns], in time order."""
         wanted = sorted(set(topics))
-        streams = [f.read(wanted, start_ns, end_ns) for f in self.files]
+        streams = [self._guarded(f, f.read(wanted, start_ns, end_ns)) for f in self.files]
         if len(streams) == 1:
             return streams[0]
         return (m for _, m in heapq.merge(*(_keyed(s, n) for n, s in enumerate(streams))))
@@ -190,7 +235,8 @@ class EvidenceSource:
         """The last message on ``topic`` at or before ``at_ns`` no larger than ``max_size``."""
         best: RawMessage | None = None
         for file in self.files:
-            for message in file.read((topic,), -(2**63), at_ns, reverse=True):
+            stream = file.read((topic,), -(2**63), at_ns, reverse=True)
+            for message in self._guarded(file, stream):
                 if len(message.data) <= max_size:
                     if best is None or message.t_ns > best.t_ns:
                         best = message

@@ -3,7 +3,7 @@ and the node graph (--graph): upstream's defaults and sanitising, clear errors f
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -13,6 +13,9 @@ from medkit_replay.config.snapshots import snapshot_config
 from medkit_replay.errors import ConfigError
 from medkit_replay.evidence.graph import load_graph
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 def read(tmp_path: Path, text: str) -> tuple[SnapshotConfig, list[str]]:
@@ -119,7 +122,9 @@ def test_graph_from_yaml(tmp_path: Path) -> None:
     "text",
     ["- a\n- b\n", "driver: 3\n", "driver:\n  talks: [/x]\n", "driver:\n  publishers: [1]\n"],
 )
-def test_a_bad_graph_is_one_clear_line(tmp_path: Path, text: str, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_bad_graph_is_one_clear_line(
+    tmp_path: Path, text: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "graph.yaml"
     path.write_text(text)
     script = tmp_path / "s.jsonl"

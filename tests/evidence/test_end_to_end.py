@@ -274,3 +274,17 @@ def test_max_bag_size_splits_a_recording_into_files(tmp_path: Path) -> None:
         copied = [(c.topic, t, bytes(raw)) for c, t, raw in reader.messages()]
         assert reader.message_count == kept["messages"] == len(copied)
     assert copied == _messages(robot.bag, topics, at(20), at(26))
+
+
+def test_a_truncated_recording_gives_a_note_not_a_traceback(tmp_path: Path) -> None:
+    robot = write_robot(tmp_path)
+    config = write_config(tmp_path)
+    (file,) = robot.bag.glob("*.mcap")
+    data = file.read_bytes()
+    file.write_bytes(data[: len(data) // 2])
+    out = tmp_path / "r.json"
+    argv = ["analyze", str(robot.bag), str(robot.script), "--config", str(config)]
+    assert main([*argv, "--evidence", str(tmp_path / "ev"), "--json", str(out), "--quiet"]) == 0
+    report = json.loads(out.read_text())
+    assert any("not read for evidence" in note for note in report["evidence_notes"])
+    assert report["snapshots"] and all(not c["topics"] for c in report["snapshots"])

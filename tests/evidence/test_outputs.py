@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -13,7 +14,9 @@ from medkit_replay.model import EvidenceRecording, RecordingTopic, SnapshotCaptu
 from medkit_replay.outputs.html import render_html
 from medkit_replay.outputs.tables import result_tables
 from medkit_replay.outputs.terminal import render_summary
-from medkit_replay.result import Result
+
+if TYPE_CHECKING:
+    from medkit_replay.result import Result
 
 ROOT = Path(__file__).resolve().parents[2]
 HOSTILE = "<script>alert(1)</script>\u202e"
