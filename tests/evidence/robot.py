@@ -189,6 +189,14 @@ SCRIPT = [
         "severity": 2,
         "source_id": "/motor_driver",
     },
+    {
+        "t_ns": at(20.1),
+        "op": "report",
+        "fault_code": "MOTOR_OVERCURRENT",
+        "event_type": "FAILED",
+        "severity": 2,
+        "source_id": "/motor_driver",
+    },
     {"t_ns": at(22.0), "op": "clear", "fault_code": "MOTOR_OVERCURRENT"},
     # the clear reset the cooldown
     {

@@ -99,7 +99,18 @@ def test_freeze_frames_are_the_expected_messages(run: Run) -> None:
     # entity default from the node graph: what /battery_monitor publishes, /rosout left out
     assert battery_fault["fault_code"].startswith("LOG_BATTERY_MONITOR_")
     assert [t["topic"] for t in battery_fault["topics"]] == ["/battery"]
-    # the reconfirmation at 20 s fell in the cooldown; the clear at 22 s reset it
+    # the report-driven reconfirmation at 20.1 s fell in the cooldown: nothing captured;
+    # the clear at 22 s reset the cooldown
+    back = [
+        (t["t_ns"], t["from_status"], t["cause"])
+        for t in report["transitions"]
+        if t["fault_code"] == "MOTOR_OVERCURRENT" and t["to_status"] == "CONFIRMED"
+    ]
+    assert back == [
+        (at(10), None, "report"),
+        (at(20.1), "HEALED", "report"),
+        (at(25), "CLEARED", "report"),
+    ]
     assert (last["capture_id"], last["t_ns"]) == (3, at(25))
     # the clear dropped capture 1's rows; capture 3 is the freeze frame now
     assert [(c["retained"], c["freeze_frame"]) for c in report["snapshots"]] == [
@@ -288,3 +299,47 @@ def test_a_truncated_recording_gives_a_note_not_a_traceback(tmp_path: Path) -> N
     report = json.loads(out.read_text())
     assert any("not read for evidence" in note for note in report["evidence_notes"])
     assert report["snapshots"] and all(not c["topics"] for c in report["snapshots"])
+
+
+NO_COOLDOWN_RETAIN = "      recapture_cooldown_sec: 0.0\n      retain_on_clear: true\n"
+
+
+@pytest.mark.parametrize(
+    ("settings", "motor"),
+    [
+        # retain_on_clear keeps capture 1 through the clear at 22 s
+        ("      retain_on_clear: true\n", [(1, True, False), (2, True, True)]),
+        # (no --graph: the battery fault's entity-default capture takes no id)
+        # no cooldown: the reconfirmation at 20.1 s captures too; the clear drops 1 and 2
+        (
+            "      recapture_cooldown_sec: 0.0\n",
+            [(1, False, False), (2, False, False), (3, True, True)],
+        ),
+        # max_per_fault 4 with 3-topic captures: each new set evicts the older one whole
+        (
+            NO_COOLDOWN_RETAIN + "      max_per_fault: 4\n",
+            [(1, False, False), (2, False, False), (3, True, True)],
+        ),
+        # max_per_fault 0: no limit
+        (
+            NO_COOLDOWN_RETAIN + "      max_per_fault: 0\n",
+            [(1, True, False), (2, True, False), (3, True, True)],
+        ),
+    ],
+)
+def test_snapshot_storage_rules(
+    tmp_path: Path, settings: str, motor: list[tuple[int, bool, bool]]
+) -> None:
+    robot = write_robot(tmp_path)
+    config = write_config(tmp_path)
+    config.write_text(config.read_text().replace("    snapshots:\n", "    snapshots:\n" + settings))
+    out = tmp_path / "r.json"
+    argv = ["analyze", str(robot.bag), str(robot.script), "--config", str(config)]
+    assert main([*argv, "--json", str(out), "--quiet"]) == 0
+    captures = json.loads(out.read_text())["snapshots"]
+    got = [
+        (c["capture_id"], c["retained"], c["freeze_frame"])
+        for c in captures
+        if c["fault_code"] == "MOTOR_OVERCURRENT"
+    ]
+    assert got == motor
