@@ -274,3 +274,17 @@ def test_entity_mode_without_a_graph_records_everything_and_says_so() -> None:
     found = plan([confirm(10, "A")], config)
     assert found.recordings[0].segments[0].topics is None
     assert any("entity mode" in note for note in found.notes)
+
+
+def test_entity_default_off_captures_nothing_even_with_a_graph() -> None:
+    graph = NodeGraph(publishes={"/driver": frozenset({"/odom"})})
+    config = SnapshotConfig(entity_default=False)
+    found = plan([confirm(10, "A")], config, graph=graph, reports=[_report(10, "A", "/driver")])
+    assert found.captures == [] and found.notes == []
+
+
+def test_an_explicit_empty_entry_opts_out_of_the_entity_default() -> None:
+    graph = NodeGraph(publishes={"/driver": frozenset({"/odom"})})
+    config = SnapshotConfig(fault_specific={"A": ()})
+    found = plan([confirm(10, "A")], config, graph=graph, reports=[_report(10, "A", "/driver")])
+    assert found.captures == []
