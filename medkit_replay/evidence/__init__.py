@@ -6,6 +6,7 @@ and time range (source), freeze frames decoded and rendered (frames), recordings
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -73,8 +74,25 @@ def collect_evidence(
     recorded_topics: Iterable[str],
 ) -> Evidence:
     """Plan the captures from the transitions, then read what they would have taken."""
+    unused = (
+        ("--evidence is given but snapshots.rosbag.enabled is false: no recording to write",)
+        if options.directory is not None and not config.rosbag.enabled
+        else ()
+    )
     if not config.captures:
-        return Evidence()
+        return Evidence(notes=unused)
+    found = _collect(config, options, inputs, transitions, reports, recorded_topics)
+    return dataclasses.replace(found, notes=(*found.notes, *unused)) if unused else found
+
+
+def _collect(
+    config: SnapshotConfig,
+    options: EvidenceOptions,
+    inputs: Iterable[Path],
+    transitions: Iterable[Transition],
+    reports: Iterable[ReportRecord],
+    recorded_topics: Iterable[str],
+) -> Evidence:
     source: EvidenceSource | None = None
 
     def opened() -> EvidenceSource:

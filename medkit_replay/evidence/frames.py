@@ -12,7 +12,6 @@ from medkit_replay.evidence.render import render
 from medkit_replay.evidence.rules import evict_capture_sets
 from medkit_replay.inputs.typestore import message_store
 from medkit_replay.model import NS_PER_SEC, SnapshotCapture, SnapshotTopic
-from medkit_replay.msgdefs import DefinitionError
 
 if TYPE_CHECKING:
     from medkit_replay.evidence.plan import Plan, PlannedCapture
@@ -48,8 +47,8 @@ def sample(
             decoded = store.deserialize_cdr(message.data, info.type)
             data = render(store, info.type, decoded)
         except ImportError:
-            raise
-        except (DefinitionError, Exception):  # upstream logs and skips an undecodable topic
+            raise  # the environment, not the message
+        except Exception:  # DefinitionError, rosbags' errors: upstream logs and skips the topic
             continue
         taken.append(
             SnapshotTopic(topic=topic, message_type=info.type, message_t_ns=message.t_ns, data=data)

@@ -313,8 +313,9 @@ class _BlackBox:
         codes += sorted(set(recording.attached))
         wanted = [c for c in codes if self._wants_row(c)]
         if not wanted:
-            recording.deleted = _deletion(
-                recording.end_ns, "every fault of the recording was cleared during its post-roll"
+            recording.deleted = (
+                recording.end_ns,
+                "every fault of the recording was cleared during its post-roll",
             )
             return
         for code in wanted:
@@ -350,8 +351,4 @@ class _BlackBox:
     def _unlink(self, recording: PlannedRecording, t_ns: int, reason: str) -> None:
         if any(r is recording for _, r in self.rows) or recording.deleted is not None:
             return
-        recording.deleted = _deletion(t_ns, reason)
-
-
-def _deletion(t_ns: int, reason: str) -> tuple[int, str]:
-    return (t_ns, reason)
+        recording.deleted = (t_ns, reason)

@@ -3,6 +3,7 @@ and the node graph (--graph): upstream's defaults and sanitising, clear errors f
 
 from __future__ import annotations
 
+import json
 from typing import TYPE_CHECKING
 
 import pytest
@@ -138,3 +139,28 @@ def test_evidence_all_needs_evidence(tmp_path: Path) -> None:
     script = tmp_path / "s.jsonl"
     script.write_text("")
     assert main(["analyze", str(script), "--evidence-all", "--quiet"]) == 2
+
+
+def test_evidence_without_rosbag_capture_says_so(tmp_path: Path) -> None:
+    script = tmp_path / "s.jsonl"
+    script.write_text("")
+    out = tmp_path / "r.json"
+    assert (
+        main(
+            [
+                "analyze",
+                str(script),
+                "--evidence",
+                str(tmp_path / "ev"),
+                "--json",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    notes = json.loads(out.read_text())["evidence_notes"]
+    assert notes == [
+        "--evidence is given but snapshots.rosbag.enabled is false: no recording to write"
+    ]
+    assert not (tmp_path / "ev").exists()
