@@ -4,6 +4,7 @@ the terminal summary (counts), the CSV/Parquet tables (one row per captured topi
 from __future__ import annotations
 
 import dataclasses
+from html.parser import HTMLParser
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -102,3 +103,28 @@ def test_parquet_writes_the_evidence_tables(result: Result, tmp_path: Path) -> N
 
     written = {p.name for p in write_parquet(result, tmp_path)}
     assert {"snapshots.parquet", "recordings.parquet"} <= written
+
+
+class _Tags(HTMLParser):
+    """Checks that every element opened in a fragment is closed in order."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.open: list[str] = []
+        self.broken: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        self.open.append(tag)
+
+    def handle_endtag(self, tag: str) -> None:
+        if not self.open or self.open.pop() != tag:
+            self.broken.append(tag)
+
+
+def test_the_evidence_section_is_well_formed(result: Result) -> None:
+    page = render_html(result)
+    start = page.index('<section id="evidence">')
+    end = page.index("</section>", start) + len("</section>")
+    parser = _Tags()
+    parser.feed(page[start:end])
+    assert parser.open == [] and parser.broken == []
