@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from medkit_replay.model import (
         ClearRecord,
         Cluster,
+        EvidenceRecording,
         FaultEvent,
         FaultSnapshot,
         InputSummary,
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
         NearMiss,
         ReportRecord,
         RetroactiveMute,
+        SnapshotCapture,
         Transition,
     )
 
@@ -74,6 +76,9 @@ class Result:
     warnings: tuple[str, ...] = ()
     summary: Summary
     config: dict[str, object] = field(default_factory=dict)
+    snapshots: tuple[SnapshotCapture, ...] = ()
+    recordings: tuple[EvidenceRecording, ...] = ()
+    evidence_notes: tuple[str, ...] = ()
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

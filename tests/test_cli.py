@@ -48,6 +48,9 @@ def test_json_to_stdout_keeps_stdout_pure(capsys: pytest.CaptureFixture[str]) ->
         "clusters",
         "near_misses",
         "retroactive_cluster_mutes",
+        "snapshots",
+        "recordings",
+        "evidence_notes",
         "parity",
         "warnings",
         "summary",
@@ -125,6 +128,8 @@ def test_csv_tables(tmp_path: Path) -> None:
             "muted_faults",
             "clusters",
             "near_misses",
+            "snapshots",
+            "recordings",
         )
     )
     header = (tmp_path / "t" / "faults.csv").read_text().splitlines()[0]
@@ -222,6 +227,8 @@ def test_python_api_tables() -> None:
         "muted_faults",
         "clusters",
         "near_misses",
+        "snapshots",
+        "recordings",
     }
     faults = tables["faults"]
     assert list(faults["fault_code"]) == [f.fault_code for f in result.faults]

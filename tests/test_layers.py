@@ -157,10 +157,12 @@ ALLOWED: dict[str, set[str]] = {
     "bridges": {"model", "engine", "trace"},
     "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs"},
     # config reads parameters into the settings types of the layers it configures.
-    "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges"},
+    "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges", "evidence"},
+    # evidence plans captures from a Result's records and reads them back from the inputs.
+    "evidence": NEUTRAL | {"files", "yaml_bounds", "inputs", "msgdefs"},
     "parity": {"model", "bridges", "config"},
     "pipeline": NEUTRAL
-    | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace"},
+    | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace", "evidence"},
     # explaining reads a Result and the FaultTrace the replay filled; it draws through outputs.
     "explaining": NEUTRAL | {"result", "trace", "outputs"},
     "outputs": NEUTRAL | {"result", "files", "msgdefs", "spool"},
@@ -183,6 +185,7 @@ ALLOWED: dict[str, set[str]] = {
         "outputs",
         "explaining",
         "trace",
+        "evidence",
     },
     "cli": {"commands", "errors", "outputs", "version"},
     "__init__": {"errors", "version", "pipeline", "result", "outputs"},

@@ -75,6 +75,26 @@ _REPORT_OPTIONS = (
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
 @config_option()
 @report_options
+@click.option(
+    "--graph",
+    "graph_file",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="The robot's node graph (YAML node -> publishers/subscribers, or `ros2 node info` "
+    "text): entity-default freeze frames and entity-scoped recordings need it.",
+)
+@click.option(
+    "--evidence",
+    "evidence_dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=None,
+    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder.",
+)
+@click.option(
+    "--evidence-all",
+    is_flag=True,
+    help="With --evidence: also write the recordings the live manager would have deleted.",
+)
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
     inputs: tuple[Path, ...],
@@ -84,6 +104,9 @@ def analyze(
     parquet_dir: Path | None,
     mcap_out: Path | None,
     html_out: Path | None,
+    graph_file: Path | None,
+    evidence_dir: Path | None,
+    evidence_all: bool,
     quiet: bool,
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
@@ -94,19 +117,32 @@ def analyze(
       medkit-replay analyze run.jsonl --json - --quiet
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
+      medkit-replay analyze mission/ --config capture.yaml --graph graph.txt --evidence clips/
     """
     # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
+    if evidence_all and evidence_dir is None:
+        raise click.UsageError("--evidence-all needs --evidence DIR")
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
-    chosen, writers = prepare_reports(inputs, configs, json_out, targets)
+    # The node graph is read like a config: no output may land on it.
+    read = (*inputs, graph_file) if graph_file is not None else inputs
+    chosen, writers = prepare_reports(read, configs, json_out, targets)
+    if evidence_dir is not None:
+        refuse_inside_inputs(evidence_dir, inputs)
+    evidence = EvidenceOptions(
+        graph=load_graph(graph_file) if graph_file is not None else None,
+        directory=evidence_dir,
+        everything=evidence_all,
+    )
     bar = None
     if not quiet:  # rich (bar and summary) is loaded only for people to read
         from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
 
         bar = progress_bar(sys.stderr)
     with bar if bar is not None else nullcontext():
-        result = replay(list(inputs), list(configs), progress=bar)
+        result = replay(list(inputs), list(configs), progress=bar, evidence=evidence)
     write_reports(result, json_out, chosen, writers, quiet=quiet)
 
 
@@ -165,6 +201,19 @@ def write_reports(
         else:
             with standard_output("the summary"):
                 print_summary(result, sys.stdout)
+
+
+def refuse_inside_inputs(directory: Path, inputs: tuple[Path, ...]) -> None:
+    """Inputs are sacred: recordings are never written into (or over) an input."""
+    target = directory.resolve()
+    for path in inputs:
+        held = path.resolve()
+        folder = held if held.is_dir() else held.parent
+        if target == held or (held.is_dir() and target.is_relative_to(folder)):
+            raise MedkitReplayError(
+                f"--evidence would write into the input {path}; choose another folder",
+                path=str(directory),
+            )
 
 
 def _output_paths(

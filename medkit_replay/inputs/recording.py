@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
 
+
 def open_bag1(path: Path, ctx: InputContext) -> Input:
     """Open a ROS 1 bag; its reader (and the ROS 1 type store) loads with the first one."""
     from medkit_replay.inputs.rosbag1 import open_bag1 as open_ros1  # noqa: PLC0415

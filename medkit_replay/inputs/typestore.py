@@ -188,3 +188,18 @@ def make_decoder(
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
     return Decoder(msgtype, candidates, note), problem
+
+
+def message_store(msgtype: str, definition: Definition) -> Typestore:
+    """A rosbags store that decodes ``msgtype``: from the recorded definition, else bundled.
+
+    Raises:
+        DefinitionError: neither defines it.
+    """
+    if definition.text.strip():
+        recorded = _recorded_store(msgtype, definition)
+        if not isinstance(recorded, str):
+            return recorded[1]
+    if msgtype in base_typestore().fielddefs:
+        return base_typestore()
+    raise DefinitionError(f"no usable definition of {msgtype}")

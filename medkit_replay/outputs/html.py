@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.atomic import atomic_text
+from medkit_replay.outputs.html_evidence import evidence_section
 from medkit_replay.outputs.html_tables import (
     CELL_CAP,
     esc,
@@ -363,6 +364,7 @@ def render_html(result: Result) -> str:
         + _header(result, span)
         + _timeline(result, lanes, span)
         + _correlation(result, span)
+        + evidence_section(result, span)
         + '<section id="records"><h2>Records</h2>'
         + record_tables(result, span)
         + "</section>"

@@ -14,6 +14,7 @@ from typing import IO, TYPE_CHECKING, Any, cast, get_args, get_origin, get_type_
 from medkit_replay.model import (
     ClearRecord,
     Cluster,
+    EvidenceRecording,
     FaultEvent,
     FaultSnapshot,
     InputSummary,
@@ -21,6 +22,7 @@ from medkit_replay.model import (
     NearMiss,
     RecordRows,
     ReportRecord,
+    SnapshotCapture,
     Transition,
 )
 from medkit_replay.outputs.json_rows import ROW_SEPARATOR, Chunk, RecordLines
@@ -79,6 +81,8 @@ muted_dict = record_dict(MutedFault)
 cluster_dict = record_dict(Cluster)
 near_miss_dict = record_dict(NearMiss)
 input_dict = record_dict(InputSummary)
+snapshot_dict = record_dict(SnapshotCapture)
+recording_dict = record_dict(EvidenceRecording)
 
 
 class _Rows:
@@ -130,6 +134,9 @@ def _sections(result: Result) -> list[tuple[str, object]]:
                 for r in result.retroactive_mutes
             ],
         ),
+        ("snapshots", [snapshot_dict(s) for s in result.snapshots]),
+        ("recordings", [recording_dict(r) for r in result.recordings]),
+        ("evidence_notes", list(result.evidence_notes)),
         ("parity", result.parity),
         ("warnings", list(result.warnings)),
         (

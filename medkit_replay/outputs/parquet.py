@@ -39,10 +39,19 @@ INT_COLUMNS = frozenset(
         "count",
         "first_at_ns",
         "last_at_ns",
+        "capture_id",
+        "message_t_ns",
+        "start_ns",
+        "end_ns",
+        "messages",
+        "bytes",
+        "deleted_ns",
     }
 )
 """Columns stored as int64 (nullable where the report has nulls); nanoseconds stay exact."""
-BOOL_COLUMNS = frozenset({"muted", "accepted", "success", "skip_correlation_auto_clear"})
+BOOL_COLUMNS = frozenset(
+    {"muted", "accepted", "success", "skip_correlation_auto_clear", "retained", "freeze_frame"}
+)
 LIST_COLUMNS = frozenset({"reporting_sources", "cluster_ids", "auto_cleared_codes", "fault_codes"})
 """Columns stored as list<string>; every other column is a (nullable) string."""
 INT64_MIN = -(2**63)

@@ -6,6 +6,7 @@ CSV cells that a spreadsheet would run as formulas are neutralised (outputs/csv_
 
 from __future__ import annotations
 
+import json
 from dataclasses import fields
 from typing import TYPE_CHECKING, Any
 
@@ -29,6 +30,7 @@ from medkit_replay.outputs.json_report import (
     fault_dict,
     muted_dict,
     near_miss_dict,
+    recording_dict,
     report_dict,
     transition_dict,
 )
@@ -55,6 +57,31 @@ EVENT_COLUMNS = [
     "auto_cleared_codes",
 ]
 """The events table: each FaultEvent with the fields of its fault a table reader filters on."""
+SNAPSHOT_COLUMNS = [
+    "fault_code",
+    "capture_id",
+    "t_ns",
+    "retained",
+    "freeze_frame",
+    "topic",
+    "message_type",
+    "message_t_ns",
+    "data",
+]
+"""The snapshots table: one row per captured topic (``data`` as JSON text); a capture that
+sampled nothing has one row with no topic."""
+RECORDING_COLUMNS = [
+    "recording_id",
+    "fault_codes",
+    "start_ns",
+    "end_ns",
+    "messages",
+    "bytes",
+    "deleted_ns",
+    "deleted_reason",
+    "path",
+]
+"""The recordings table: one row per black-box recording (its per-topic counts are in the JSON)."""
 TABLE_COLUMNS: dict[str, list[str]] = {
     "faults": _columns(FaultSnapshot),
     "events": EVENT_COLUMNS,
@@ -64,6 +91,8 @@ TABLE_COLUMNS: dict[str, list[str]] = {
     "muted_faults": _columns(MutedFault),
     "clusters": _columns(Cluster),
     "near_misses": _columns(NearMiss),
+    "snapshots": SNAPSHOT_COLUMNS,
+    "recordings": RECORDING_COLUMNS,
 }
 """Every table's columns: the record's fields in declaration order, as the JSON report has them."""
 
@@ -84,6 +113,35 @@ def _event_row(event: dict[str, object]) -> dict[str, object]:
     }
 
 
+def _snapshot_rows(result: Result) -> list[dict[str, object]]:
+    rows: list[dict[str, object]] = []
+    for capture in result.snapshots:
+        head: dict[str, object] = {
+            "fault_code": capture.fault_code,
+            "capture_id": capture.capture_id,
+            "t_ns": capture.t_ns,
+            "retained": capture.retained,
+            "freeze_frame": capture.freeze_frame,
+        }
+        rows.extend(
+            {
+                **head,
+                "topic": topic.topic,
+                "message_type": topic.message_type,
+                "message_t_ns": topic.message_t_ns,
+                "data": json.dumps(topic.data, ensure_ascii=True, allow_nan=False),
+            }
+            for topic in capture.topics
+        )
+        if not capture.topics:
+            rows.append(head)
+    return rows
+
+
+def _recording_row(recording: dict[str, object]) -> dict[str, object]:
+    return {column: recording[column] for column in RECORDING_COLUMNS}
+
+
 def result_tables(result: Result) -> dict[str, pd.DataFrame]:
     """One DataFrame per report table, with stable columns even when empty."""
     rows: dict[str, list[dict[str, object]]] = {
@@ -95,6 +153,8 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
         "muted_faults": [muted_dict(m) for m in result.muted_faults],
         "clusters": [cluster_dict(c) for c in result.clusters],
         "near_misses": [near_miss_dict(n) for n in result.near_misses],
+        "snapshots": _snapshot_rows(result),
+        "recordings": [_recording_row(recording_dict(r)) for r in result.recordings],
     }
     return {name: _frame(rows[name], columns) for name, columns in TABLE_COLUMNS.items()}
 

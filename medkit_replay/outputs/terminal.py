@@ -52,6 +52,8 @@ MAX_TEXT = 200
 """Characters of a source, a code, a cluster id shown (a valid fault code has at most 128)."""
 MAX_WARNING = WARNING_CAP
 """Characters of a warning (or a path) shown; the JSON report has it whole."""
+MAX_EVIDENCE_LINES = 20
+"""Freeze-frame captures and recordings listed each; the rest are counted."""
 EPOCH_FLOOR_NS = 10**18
 """Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
@@ -303,6 +305,49 @@ def _clusters(result: Result, clock: _Clock) -> Group | None:
     return Group(*lines)
 
 
+def _evidence(result: Result, clock: _Clock) -> Group | None:
+    """Counts of freeze-frame captures and black-box recordings, one line per recording."""
+    captures, recordings = result.snapshots, result.recordings
+    if not captures and not recordings:
+        return None
+    held = sum(1 for c in captures if c.retained)
+    deleted = sum(1 for r in recordings if r.deleted_ns is not None)
+    written = sum(1 for r in recordings if r.path is not None)
+    head = Text("Evidence: ", style="bold")
+    head.append(f"{_plural(len(captures), 'freeze-frame capture')} ({held} retained)")
+    if recordings:
+        head.append(
+            f", {_plural(len(recordings), 'recording')} ({deleted} deleted by the live "
+            f"manager, {written} written)"
+        )
+    lines: list[RenderableType] = [head]
+    for capture in captures[:MAX_EVIDENCE_LINES]:
+        line = Text(f"{clock.offset(capture.t_ns)}  ")
+        line.append(_show(capture.fault_code), style="bold")
+        topics = ", ".join(_show(t.topic) for t in capture.topics) or "nothing sampled"
+        line.append(f"  capture {capture.capture_id}: {topics}")
+        lines.append(Padding(line, (0, 0, 0, 2)))
+    for recording in recordings[:MAX_EVIDENCE_LINES]:
+        line = Text(f"{clock.offset(recording.start_ns)}-{clock.offset(recording.end_ns)}  ")
+        line.append(_show(recording.recording_id), style="bold")
+        size = recording.bytes
+        shown = f"{size} B" if size < 1000 else f"{size / 1000:.1f} kB"
+        line.append(f"  {recording.messages} msg, {shown}")
+        lines.append(Padding(line, (0, 0, 0, 2)))
+        if recording.deleted_reason is not None:
+            gone = Text(f"deleted at {clock.offset(recording.deleted_ns or 0)}: ", style="yellow")
+            gone.append(_show(recording.deleted_reason))
+            lines.append(Padding(gone, (0, 0, 0, 4)))
+    hidden = max(len(captures) - MAX_EVIDENCE_LINES, 0) + max(
+        len(recordings) - MAX_EVIDENCE_LINES, 0
+    )
+    if hidden:
+        lines.append(Padding(Text(f"... {hidden} more in the JSON report"), (0, 0, 0, 2)))
+    for note in result.evidence_notes:
+        lines.append(Padding(Text("note: " + _show(note, MAX_WARNING)), (0, 0, 0, 2)))
+    return Group(*lines)
+
+
 def _table(title: str, *, leading: int) -> Table:
     return Table(
         title=title,
@@ -364,6 +409,9 @@ def summary_renderable(result: Result, width: int = 80) -> Group:
         clusters = _clusters(result, clock)
         if clusters is not None:
             parts += [Text(""), clusters]
+        evidence = _evidence(result, clock)
+        if evidence is not None:
+            parts += [Text(""), evidence]
     if other:
         parts += [Text(""), _warnings(other)]
     return Group(*parts)

@@ -5,6 +5,7 @@ The only place the layers meet (besides the commands, which call this).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -12,9 +13,11 @@ from medkit_replay.config.effective import effective_config
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import replay_options
+from medkit_replay.config.snapshots import snapshot_config
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
+from medkit_replay.evidence import EvidenceOptions, collect_evidence
 from medkit_replay.inputs import open_recording
 from medkit_replay.inputs.selection import LOG_TYPE
 from medkit_replay.model import (
@@ -60,6 +63,7 @@ def replay(
     trace: FaultTrace | None = None,
     follow: Follow | None = None,
     live: Callable[[Transition | FaultEvent], None] | None = None,
+    evidence: EvidenceOptions | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -82,6 +86,8 @@ def replay(
             first, a finished recording is replayed once more as it stands (said in
             ``follow.notes``), so the result is always that of the finished recording.
         live: called with every transition and FaultEvent as the manager records it.
+        evidence: the node graph and where to write black-box recordings (freeze frames
+            and recordings are listed in the result whatever it says).
 
     Raises:
         InputError: an input cannot be used at all.
@@ -95,6 +101,8 @@ def replay(
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
     options, option_warnings = replay_options(params)
     warnings += option_warnings
+    snapshots, snapshot_warnings = snapshot_config(params.node("fault_manager"))
+    warnings += snapshot_warnings
 
     events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS)
     transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS)
@@ -195,7 +203,7 @@ def replay(
         parity = parity if parity is not None else {}
         parity["service_responses"] = compare_responses(router.services.responses, reports, clears)
     config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
-    return assemble_result(
+    result = assemble_result(
         manager,
         timeline,
         output,
@@ -205,6 +213,20 @@ def replay(
         parity,
         (events, transitions, reports, clears),
         config,
+    )
+    found = collect_evidence(
+        snapshots,
+        evidence if evidence is not None else EvidenceOptions(),
+        paths,
+        transitions,
+        reports,
+        sorted({t.topic for s in summaries for t in s.topics}),
+    )
+    return dataclasses.replace(
+        result,
+        snapshots=found.snapshots,
+        recordings=found.recordings,
+        evidence_notes=found.notes,
     )
 
 

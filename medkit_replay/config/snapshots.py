@@ -1,0 +1,174 @@
+"""The fault_manager's capture parameters (``snapshots.*``, ``snapshots.rosbag.*``) and the
+snapshot config file they may name, read with upstream's defaults, sanitising and warnings.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import TYPE_CHECKING
+
+from yaml.constructor import ConstructorError, SafeConstructor
+
+from medkit_replay.config.nodes import located, values
+from medkit_replay.config.reader import ParameterReader
+from medkit_replay.errors import ConfigError
+from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
+from medkit_replay.files import read_limited_text
+from medkit_replay.yaml_bounds import compose_config
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from medkit_replay.config.params import NodeParams
+
+_P = "snapshots."
+_R = "snapshots.rosbag."
+
+
+def snapshot_config(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
+    """Build the capture config from the fault_manager node's parameters.
+
+    Raises:
+        ConfigError: a parameter of the wrong type, with its file and line.
+    """
+    return located(params, lambda: _build(params))
+
+
+def _build(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
+    reader = ParameterReader("fault_manager", values(params))
+    cooldown = reader.double(_P + "recapture_cooldown_sec", 60.0)
+    if cooldown < 0 or math.isnan(cooldown):
+        reader.warn(f"snapshots.recapture_cooldown_sec {cooldown} should be >= 0; disabling it")
+        cooldown = 0.0
+    max_per_fault = reader.integer(_P + "max_per_fault", 10)
+    if max_per_fault < 0:
+        reader.warn(f"snapshots.max_per_fault {max_per_fault} should be >= 0; no limit")
+        max_per_fault = 0
+    timeout = reader.double(_P + "timeout_sec", 1.0)
+    if not timeout > 0:
+        reader.warn(f"snapshots.timeout_sec {timeout} must be positive; using 1.0")
+        timeout = 1.0
+    max_size = reader.integer(_P + "max_message_size", 65536)
+    if max_size <= 0:
+        reader.warn(f"snapshots.max_message_size {max_size} must be positive; using 65536")
+        max_size = 65536
+    defaults = tuple(t for t in reader.strings(_P + "default_topics") if t)
+    fault_specific: dict[str, tuple[str, ...]] = {}
+    patterns: dict[str, tuple[str, ...]] = {}
+    file_param = params.get(_P + "config_file")
+    file_name = reader.string(_P + "config_file", "")
+    if file_name and file_param is not None:
+        path = file_param.path.parent / file_name
+        loaded = _load_file(path, reader)
+        if loaded is not None:
+            fault_specific, patterns, file_defaults = loaded
+            if file_defaults and not defaults:
+                defaults = file_defaults
+    compiled: list[tuple[str, tuple[str, ...]]] = []
+    for pattern in sorted(patterns):
+        try:
+            re.compile(pattern)
+        except re.error as err:
+            reader.warn(f"snapshot pattern {pattern!r} is not a valid regex and is ignored: {err}")
+            continue
+        compiled.append((pattern, patterns[pattern]))
+    config = SnapshotConfig(
+        enabled=reader.boolean(_P + "enabled", True),
+        background_capture=reader.boolean(_P + "background_capture", False),
+        timeout_sec=timeout,
+        max_message_size=max_size,
+        default_topics=defaults,
+        entity_default=reader.boolean(_P + "entity_default", True),
+        fault_specific=fault_specific,
+        patterns=tuple(compiled),
+        recapture_cooldown_sec=cooldown,
+        retain_on_clear=reader.boolean(_P + "retain_on_clear", False),
+        max_per_fault=max_per_fault,
+        rosbag=_rosbag(reader),
+    )
+    return config, reader.warnings
+
+
+def _rosbag(reader: ParameterReader) -> RosbagConfig:
+    if not reader.boolean(_R + "enabled", False):
+        return RosbagConfig()  # upstream declares the rest only when enabled
+    before = reader.double(_R + "duration_sec", 5.0)
+    if not before > 0:
+        reader.warn(f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0")
+        before = 5.0
+    after = reader.double(_R + "duration_after_sec", 1.0)
+    if after < 0:
+        reader.warn(f"snapshots.rosbag.duration_after_sec {after} must be >= 0; using 0.0")
+        after = 0.0
+    fmt = reader.string(_R + "format", "mcap")
+    if fmt not in ("mcap", "sqlite3"):
+        reader.warn(f"snapshots.rosbag.format {fmt!r} is unknown; using sqlite3 as upstream does")
+        fmt = "sqlite3"
+    size = reader.integer(_R + "max_bag_size_mb", 50)
+    if size <= 0:
+        reader.warn("snapshots.rosbag.max_bag_size_mb must be positive; using 50")
+        size = 50
+    per_fault = reader.integer(_R + "max_bags_per_fault", 1)
+    if per_fault < 0:
+        reader.warn("snapshots.rosbag.max_bags_per_fault must be >= 0; no limit")
+        per_fault = 0
+    return RosbagConfig(
+        enabled=True,
+        duration_sec=before,
+        duration_after_sec=after,
+        topics=reader.string(_R + "topics", "entity"),
+        include_topics=reader.strings(_R + "include_topics"),
+        exclude_topics=reader.strings(_R + "exclude_topics"),
+        exclude_sensor_topics=reader.boolean(_R + "exclude_sensor_topics", True),
+        lazy_start=reader.boolean(_R + "lazy_start", False),
+        format=fmt,
+        max_bag_size_mb=size,
+        max_bags_per_fault=per_fault,
+        auto_cleanup=reader.boolean(_R + "auto_cleanup", True),
+    )
+
+
+Loaded = tuple[dict[str, tuple[str, ...]], dict[str, tuple[str, ...]], tuple[str, ...]]
+
+
+def _load_file(path: Path, reader: ParameterReader) -> Loaded | None:
+    """fault_specific, patterns and default_topics of a snapshot config file.
+
+    Upstream logs and carries on without the file when it is missing or not YAML; so does this,
+    with a warning. A file of the wrong shape is refused, naming it.
+    """
+    try:
+        text = read_limited_text(path)
+    except (OSError, UnicodeDecodeError) as err:
+        reader.warn(f"snapshot config file {path} cannot be read ({err}); ignored as upstream does")
+        return None
+    root = compose_config(text, str(path))
+    if root is None:
+        return {}, {}, ()
+    try:
+        data = SafeConstructor().construct_document(root)
+    except ConstructorError as err:
+        raise ConfigError(f"invalid YAML: {err.problem}", path=str(path)) from None
+    if not isinstance(data, dict):
+        raise ConfigError("a snapshot config is a map (fault_specific, patterns)", path=str(path))
+
+    def topic_map(key: str) -> dict[str, tuple[str, ...]]:
+        section = data.get(key) or {}
+        if not isinstance(section, dict):
+            raise ConfigError(f"{key} must map names to lists of topics", path=str(path))
+        out: dict[str, tuple[str, ...]] = {}
+        for name, topics in section.items():
+            out[str(name)] = _topic_list(topics, path, f"{key}.{name}")
+        return out
+
+    defaults = _topic_list(data.get("default_topics") or [], path, "default_topics")
+    return topic_map("fault_specific"), topic_map("patterns"), defaults
+
+
+def _topic_list(value: object, path: Path, where: str) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    if not isinstance(value, list) or not all(isinstance(t, str) for t in value):
+        raise ConfigError(f"{where} must be a list of topic names", path=str(path))
+    return tuple(value)

@@ -1,0 +1,151 @@
+"""Evidence: the freeze frames and black-box recordings the live fault manager would have captured.
+
+Planned from the replay's transitions (plan), read in a second pass over the recording by topic
+and time range (source), freeze frames decoded and rendered (frames), recordings copied (clips).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from medkit_replay.errors import MedkitReplayError
+from medkit_replay.evidence.clips import evidence_recording
+from medkit_replay.evidence.frames import freeze_frames
+from medkit_replay.evidence.graph import NodeGraph, load_graph
+from medkit_replay.evidence.plan import plan_evidence
+from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
+from medkit_replay.evidence.source import EvidenceSource
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+    from pathlib import Path
+
+    from medkit_replay.evidence.plan import Plan
+    from medkit_replay.model import (
+        EvidenceRecording,
+        ReportRecord,
+        SnapshotCapture,
+        Transition,
+    )
+
+__all__ = [
+    "Evidence",
+    "EvidenceOptions",
+    "NodeGraph",
+    "RosbagConfig",
+    "SnapshotConfig",
+    "collect_evidence",
+    "load_graph",
+]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class EvidenceOptions:
+    """How the evidence of one replay is gathered and where recordings go.
+
+    Attributes:
+        graph: the robot's node graph (entity-default freeze frames, entity-scoped recordings).
+        directory: write each recording there as a rosbag2 folder (None: only list them).
+        everything: also write the recordings the live manager would have deleted.
+    """
+
+    graph: NodeGraph | None = None
+    directory: Path | None = None
+    everything: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Evidence:
+    """What a replay's captures produced."""
+
+    snapshots: tuple[SnapshotCapture, ...] = ()
+    recordings: tuple[EvidenceRecording, ...] = ()
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def collect_evidence(
+    config: SnapshotConfig,
+    options: EvidenceOptions,
+    inputs: Iterable[Path],
+    transitions: Iterable[Transition],
+    reports: Iterable[ReportRecord],
+    recorded_topics: Iterable[str],
+) -> Evidence:
+    """Plan the captures from the transitions, then read what they would have taken."""
+    unused = (
+        ("--evidence is given but snapshots.rosbag.enabled is false: no recording to write",)
+        if options.directory is not None and not config.rosbag.enabled
+        else ()
+    )
+    if not config.captures:
+        return Evidence(notes=unused)
+    found = _collect(config, options, inputs, transitions, reports, recorded_topics)
+    return dataclasses.replace(found, notes=(*found.notes, *unused)) if unused else found
+
+
+def _collect(
+    config: SnapshotConfig,
+    options: EvidenceOptions,
+    inputs: Iterable[Path],
+    transitions: Iterable[Transition],
+    reports: Iterable[ReportRecord],
+    recorded_topics: Iterable[str],
+) -> Evidence:
+    source: EvidenceSource | None = None
+
+    def opened() -> EvidenceSource:
+        nonlocal source
+        if source is None:
+            source = EvidenceSource(inputs)
+        return source
+
+    def probe(topics: Iterable[str], start_ns: int, end_ns: int) -> bool:
+        return opened().any_between(topics, start_ns, end_ns)
+
+    try:
+        plan = plan_evidence(config, transitions, reports, recorded_topics, options.graph, probe)
+        if not plan.captures and not plan.recordings:
+            return Evidence(notes=tuple(plan.notes))
+        return _gather(plan, config, options, opened())
+    finally:
+        if source is not None:
+            source.close()
+
+
+def _gather(
+    plan: Plan, config: SnapshotConfig, options: EvidenceOptions, source: EvidenceSource
+) -> Evidence:
+    notes = list(plan.notes)
+    if source.skipped:
+        notes.append("evidence could not be read from: " + "; ".join(source.skipped))
+    snapshots = freeze_frames(plan, config, source)
+    recordings: list[EvidenceRecording] = []
+    directory = options.directory
+    if directory is not None and plan.recordings:
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot create the evidence folder: {err.strerror or err}", path=str(directory)
+            ) from None
+    for recording in plan.recordings:
+        write = directory is not None and (recording.deleted is None or options.everything)
+        target = directory / recording.name if write and directory is not None else None
+        try:
+            recordings.append(
+                evidence_recording(
+                    recording,
+                    plan.subscribed,
+                    source,
+                    target,
+                    config.rosbag.format,
+                    config.rosbag.max_bag_size_mb * 1024 * 1024,
+                )
+            )
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write recording: {err.strerror or err}", path=str(target)
+            ) from None
+    return Evidence(snapshots, tuple(recordings), tuple(notes))
