@@ -46,6 +46,14 @@ def _at_offset_ns(at: float | None) -> int | None:
     help="Stop the story at this many seconds from the recording's start and show the fault's "
     "state then.",
 )
+@click.option(
+    "--graph",
+    "graph_file",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="The robot's node graph, as for 'analyze --graph': the freeze frames and recordings "
+    "the story tells that use the faulting node's own topics need it.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Write the story as JSON records.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def explain(
@@ -53,6 +61,7 @@ def explain(
     code: str,
     configs: tuple[Path, ...],
     at: float | None,
+    graph_file: Path | None,
     as_json: bool,
     quiet: bool,
 ) -> None:
@@ -70,6 +79,7 @@ def explain(
       medkit-replay explain run.jsonl MOTOR_OVERHEAT --json > story.json
     """
     # The replay's machinery loads only when the command runs (``--help`` stays light).
+    from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
     from medkit_replay.explaining import (  # noqa: PLC0415
         build_story,
         known_codes,
@@ -84,7 +94,15 @@ def explain(
     trace = FaultTrace(fault_code=code, at_offset_ns=_at_offset_ns(at))
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
-        result = replay(list(inputs), list(configs), progress=bar, trace=trace)
+        result = replay(
+            list(inputs),
+            list(configs),
+            progress=bar,
+            trace=trace,
+            evidence=EvidenceOptions(
+                graph=load_graph(graph_file) if graph_file is not None else None
+            ),
+        )
     if not trace.items:
         nearest = nearest_codes(code, known_codes(result))
         shown = ", ".join(printable(clip(c, MAX_CODE_SHOWN)) for c in nearest)

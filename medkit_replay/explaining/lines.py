@@ -13,10 +13,19 @@ Part = tuple[str, str]
 Line = tuple[Part, ...]
 
 EntryKind = Literal[
-    "report", "repeat", "held", "correlation", "transition", "event", "event_withheld", "clear"
+    "report",
+    "repeat",
+    "held",
+    "correlation",
+    "transition",
+    "event",
+    "event_withheld",
+    "clear",
+    "capture",
+    "recording",
 ]
 """What a story entry tells; ``repeat`` stands for reports in a row that did the same."""
-JSON = str | int | bool | None | list["JSON"] | dict[str, "JSON"]
+JSON = str | int | float | bool | None | list["JSON"] | dict[str, "JSON"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

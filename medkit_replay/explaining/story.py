@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from medkit_replay.explaining.entries import ENTRY_BUILDERS, EntryBuilder, when
+from medkit_replay.explaining.evidence import evidence_entries
 from medkit_replay.explaining.lines import Entry, Line, part
 from medkit_replay.text import severity_name
 from medkit_replay.trace import CorrelationDecision, HeldRequest, TracedReport, TracedTransition
@@ -261,7 +262,14 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
             break
         builder.t_ns = item_time(item)
         ENTRY_BUILDERS[type(item)](builder, item)
-    entries = _condense(builder.entries, origin_ns, trace.fault_code)
+    entries = _with_evidence(
+        _condense(builder.entries, origin_ns, trace.fault_code),
+        [
+            e
+            for e in evidence_entries(result, trace.fault_code, origin_ns)
+            if at_ns is None or e.t_ns <= at_ns
+        ],
+    )
     state, state_fields = state_lines(trace.state_at, origin_ns, trace.fault_code)
     header, summary = _header(result, trace, builder.entries, origin_ns)
     return Story(
@@ -276,6 +284,17 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
         state=tuple(state),
         state_fields=state_fields,
     )
+
+
+def _with_evidence(entries: list[Entry], evidence: list[Entry]) -> list[Entry]:
+    """Each evidence entry after every story entry up to its time (the confirming step first)."""
+    out: list[Entry] = []
+    pending = list(evidence)
+    for entry in entries:
+        while pending and pending[0].t_ns < entry.t_ns:
+            out.append(pending.pop(0))
+        out.append(entry)
+    return out + pending
 
 
 def _header(
