@@ -5,32 +5,49 @@ Records pile up as rows in the spools' tails and are settled every SETTLE_EVERY 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 from medkit_replay.inputs import Message
-from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
-    from medkit_replay.engine.timeline import Timeline
+    from collections.abc import Sequence
+
     from medkit_replay.inputs import Recording
     from medkit_replay.pipeline.meter import Meter
     from medkit_replay.pipeline.routing import Gate, Handler, Router
+    from medkit_replay.spool import Spool
 
 SETTLE_EVERY = 1024
 """Messages between two spills of the records the loop piled up (bounds memory)."""
 
 
+class Clock(Protocol):
+    """The timers the loop runs between messages: a Timeline, or several driven as one (a
+    sweep's fan-out)."""
+
+    last_ns: int | None
+
+    def advance(self, t_ns: int) -> None:
+        """Run every timer tick due at or before ``t_ns``."""
+
+    def due_ns(self) -> int:
+        """The earliest message time at which :meth:`advance` has more to do than noting it."""
+
+
 def replay_loop(
-    recording: Recording, meter: Meter | None, timeline: Timeline, router: Router, gate: Gate
+    recording: Recording,
+    meter: Meter | None,
+    timeline: Clock,
+    router: Router,
+    gate: Gate,
+    spools: Sequence[Spool[Any]] = (),
 ) -> int:
     """Every message, in time order, to its bridge (field by field into the manager, which
-    records rows) or as request objects to the gate; timers run before each message's time."""
+    records rows) or as request objects to the gate; timers run before each message's time.
+    ``spools`` are settled now and then."""
     messages = 0
     next_at = meter.next_at if meter is not None else 0  # 0: never reached
     settle_at = SETTLE_EVERY
-    output = timeline.manager.output
-    logs = (output.reports, output.events, output.transitions)
-    spools = [log for log in logs if isinstance(log, Spool)]
     report, apply = gate.report, gate.apply
     handlers: dict[tuple[str, str, str], Handler | None] = {}
     due = timeline.due_ns()

@@ -26,7 +26,6 @@ if TYPE_CHECKING:
 
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.config.replay_options import ReplayOptions
-    from medkit_replay.engine.timeline import Timeline
     from medkit_replay.model import Origin, Progress
 
 Request = ReportRequest | ClearRequest
@@ -106,14 +105,20 @@ class Gate:
     """The double-counting rule between bridges and the manager: recorded service traffic wins.
 
     A bridge's request for a code also present in recorded ReportFault calls is withheld.
+    What passes goes to ``apply`` (request objects: a Timeline's) or ``report_fields`` (a
+    bridge's fields: a manager's, or a sweep's fan-out to several).
     """
 
-    def __init__(self, timeline: Timeline, recorded_codes: set[str]) -> None:
-        self.timeline = timeline
+    def __init__(
+        self,
+        apply: Callable[[Request], object],
+        report_fields: ReportSink,
+        recorded_codes: set[str],
+    ) -> None:
+        self._apply = apply
         self.recorded_codes = recorded_codes
         self.withheld: Counter[str] = Counter()
         self.withheld_codes: dict[str, set[str]] = {}
-        report_fields = timeline.manager.report_fields
         self.report: ReportSink = self._report_gated if recorded_codes else report_fields
         self._report_fields = report_fields
 
@@ -131,7 +136,7 @@ class Gate:
                 request.event_type, request.severity, request.description, request.source_id,
             )  # fmt: skip
         else:
-            self.timeline.apply(request)
+            self._apply(request)
 
     def _report_gated(
         self,
