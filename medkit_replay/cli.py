@@ -15,6 +15,7 @@ from medkit_replay.commands.check import check
 from medkit_replay.commands.diff import diff
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.streams import discard_stdout
+from medkit_replay.commands.sweep import sweep
 from medkit_replay.errors import MedkitReplayError, Terminated
 from medkit_replay.outputs.console import echo
 from medkit_replay.version import __version__
@@ -74,6 +75,7 @@ cli.add_command(analyze)
 cli.add_command(check)
 cli.add_command(diff)
 cli.add_command(fleet)
+cli.add_command(sweep)
 
 
 if __name__ == "__main__":
