@@ -53,18 +53,14 @@ def summary_renderables(
         title="variants, best first",
         title_justify="left",
         pad_edge=False,
-        caption=f"conf: faults confirmed (summed over inputs); flaps: confirm-heal cycles; "
-        "events: FaultEvents published; muted: events muted by correlation; near: near misses; "
-        f"lat s: mean detection latency. Ranked by {RANKING}.",
-        caption_justify="left",
     )
     table.add_column("#", justify="right", no_wrap=True)
-    table.add_column("variant", overflow="fold", min_width=24)
+    table.add_column("variant", overflow="fold", min_width=20, ratio=1)
     names = ["conf", "flaps", "events", "muted", "near", "lat s"]
     if budget:
-        names.append("over budget")
+        names.append("over")
     for name in names:
-        table.add_column(name, justify="right", no_wrap=True, min_width=min(len(name), 6))
+        table.add_column(name, justify="right", no_wrap=True)
     for total in totals[:MAX_VARIANT_ROWS]:
         cells: list[Text | str] = [
             str(total.rank),
@@ -81,6 +77,14 @@ def summary_renderables(
             cells.append(Text(f"{over:,}", style="bold red" if over else ""))
         table.add_row(*cells)
     parts.append(table)
+    legend = (
+        "conf: faults confirmed (summed over inputs); flaps: confirm-heal cycles; events: "
+        "FaultEvents published; muted: events muted by correlation; near: near misses; lat s: "
+        "mean detection latency"
+        + ("; over: inputs over budget" if budget else "")
+        + f". Ranked by {RANKING}."
+    )
+    parts.append(Text(legend, style="dim"))
     if len(totals) > MAX_VARIANT_ROWS:
         more = len(totals) - MAX_VARIANT_ROWS
         parts.append(Text(f"... {more:,} more variants in variants.csv", style="dim"))
