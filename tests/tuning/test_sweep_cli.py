@@ -82,7 +82,8 @@ def test_the_summary_ranks_fewest_flaps_first_among_equal_detections(
     status, out, _ = run([*argv, "--vary", "fault_manager.healing_threshold=1,2,4"], capsys)
     assert status == 0
     assert "sweep: 3 variant(s) x 1 input(s)" in out
-    ranked = [line.split()[1] for line in out.splitlines() if line.strip()[:2] in ("1 ", "2 ", "3 ")]
+    lines = out.splitlines()
+    ranked = [line.split()[1] for line in lines if line.strip()[:2] in ("1 ", "2 ", "3 ")]
     # Healing after 4 net PASSED never heals WIFI_WEAK here: no flaps, fewest events.
     assert ranked[0] == "v03"
     assert "Ranked by" in out.replace("\n", " ")
