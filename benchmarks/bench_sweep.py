@@ -1,0 +1,90 @@
+"""Benchmark: a sweep of 24 fault-manager variants on the 10-minute mission against one analyze.
+
+Usage:
+    python benchmarks/bench_sweep.py [--out DIR] [--seed 1] [--repeat 3] [--jobs N]
+
+The mission is ``bench_recording.mission_recording(root, seed, 600)`` (rosbag2, MCAP storage,
+~0.9 GB, 15 Hz camera frames around the traffic the replay reads), written to ``--out DIR``
+(kept and reused) or a temporary directory. Both commands run as CLIs in fresh processes with
+the log bridge on (``medkit_replay: {enable_log_bridge: true}``), as bench_recording does:
+
+- ``medkit-replay analyze MISSION --config PARAMS --quiet``;
+- ``medkit-replay sweep MISSION --config PARAMS --quiet --out TMP`` over the grid
+  ``confirmation_threshold=-1,-3,-5`` x ``healing_threshold=1,3,5,10`` x
+  ``auto_confirm_after_sec=0.0,5.0`` with healing on: 24 variants, one bridge setting;
+  with the default workers (one per CPU) and with ``--jobs 1``.
+
+Each is run ``--repeat`` times, interleaved, and the fastest wall time kept (other work on the
+machine only slows a run down); the target is sweep <= 4x analyze. Peak RSS per command too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from bench_recording import PARAMS, mission_recording  # this script's folder is on sys.path
+
+GRID = (
+    "fault_manager.confirmation_threshold=-1,-3,-5",
+    "fault_manager.healing_enabled=true",
+    "fault_manager.healing_threshold=1,3,5,10",
+    "fault_manager.auto_confirm_after_sec=0.0,5.0",
+)
+TARGET = 4.0
+
+
+def timed(argv: list[str]) -> tuple[float, int]:
+    """Wall seconds and peak RSS (KB) of one command in a fresh process."""
+    start = time.perf_counter()
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
+    elapsed = time.perf_counter() - start
+    return elapsed, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--jobs", type=int, default=None, help="workers of the first sweep")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as scratch:
+        root = args.out if args.out is not None else Path(scratch)
+        root.mkdir(parents=True, exist_ok=True)
+        mission = mission_recording(root, args.seed, 600)
+        params = Path(scratch) / "params.yaml"
+        params.write_text(PARAMS)
+        cli = [sys.executable, "-m", "medkit_replay.cli"]
+        analyze = [*cli, "analyze", str(mission), "--config", str(params), "--quiet"]
+        sweep = [*cli, "sweep", str(mission), "--config", str(params), "--quiet"]
+        sweep += [f"--vary={spec}" for spec in GRID]
+        sweep += ["--out", str(Path(scratch) / "tables")]
+        default = sweep + ([f"--jobs={args.jobs}"] if args.jobs else [])
+        commands = {"analyze": analyze, "sweep": default, "sweep --jobs 1": [*sweep, "--jobs=1"]}
+        best: dict[str, float] = {}
+        for round_ in range(args.repeat):
+            for name, argv in commands.items():
+                elapsed, _ = timed(argv)
+                best[name] = min(best.get(name, elapsed), elapsed)
+                print(f"round {round_ + 1}: {name:15} {elapsed:6.2f} s", flush=True)
+        load = os.getloadavg()[0]
+        print(f"\nbest of {args.repeat} (1-minute load {load:.1f}, {os.cpu_count()} CPUs):")
+        for name, seconds in best.items():
+            ratio = seconds / best["analyze"]
+            verdict = "" if name == "analyze" else f"  {ratio:.2f}x analyze"
+            if name != "analyze":
+                verdict += f" (target <= {TARGET:g}x: {'met' if ratio <= TARGET else 'NOT met'})"
+            print(f"  {name:15} {seconds:6.2f} s{verdict}")
+        rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        print(f"  peak RSS of any child: {rss / 1024:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
