@@ -15,6 +15,7 @@ from medkit_replay.commands.check import check
 from medkit_replay.commands.diff import diff
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.streams import discard_stdout
+from medkit_replay.commands.suggest_rules import suggest_rules
 from medkit_replay.commands.sweep import sweep
 from medkit_replay.errors import MedkitReplayError, Terminated
 from medkit_replay.outputs.console import echo
@@ -76,6 +77,7 @@ cli.add_command(check)
 cli.add_command(diff)
 cli.add_command(fleet)
 cli.add_command(sweep)
+cli.add_command(suggest_rules)
 
 
 if __name__ == "__main__":
