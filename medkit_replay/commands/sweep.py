@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from medkit_replay.commands import config_option
-from medkit_replay.commands.fleet import _timeout
+from medkit_replay.commands.fleet import timeout_seconds
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -68,7 +68,7 @@ from medkit_replay.tuning.terminal import print_summary, summary_renderables
     "--timeout",
     type=float,
     default=None,
-    callback=_timeout,
+    callback=timeout_seconds,
     metavar="SECONDS",
     help="Kill a job (one input, a share of the grid) that takes longer; its rows say so.",
 )
