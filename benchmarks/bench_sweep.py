@@ -2,6 +2,7 @@
 
 Usage:
     python benchmarks/bench_sweep.py [--out DIR] [--seed 1] [--repeat 3] [--jobs N]
+    python benchmarks/bench_sweep.py --memory
 
 The mission is ``bench_recording.mission_recording(root, seed, 600)`` (rosbag2, MCAP storage,
 ~0.9 GB, 15 Hz camera frames around the traffic the replay reads), written to ``--out DIR``
@@ -16,11 +17,17 @@ the log bridge on (``medkit_replay: {enable_log_bridge: true}``), as bench_recor
 
 Each is run ``--repeat`` times, interleaved, and the fastest wall time kept (other work on the
 machine only slows a run down); the target is sweep <= 4x analyze. Peak RSS per command too.
+
+Memory mode (``--memory``) sweeps ``healing_threshold`` over 10 values on 10 of the tuning
+fleet's missions (100 rows) and over 100 values on 100 missions (10,000 rows), writing the
+tables, and prints the peak RSS of each (``/usr/bin/time``): flat means the second is close to
+the first.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import resource
 import subprocess
@@ -48,13 +55,44 @@ def timed(argv: list[str]) -> tuple[float, int]:
     return elapsed, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
 
 
+def memory() -> None:
+    """Peak RSS of a 100-row and a 10,000-row sweep (tables written)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from sample_bags.make_tuning_fleet import PARAMS as FLEET_PARAMS, mission  # noqa: PLC0415
+
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(scratch)
+        params = folder / "params.yaml"
+        params.write_text(FLEET_PARAMS)
+        scripts = []
+        for index in range(100):
+            path = folder / "missions" / f"run_{index:03d}.jsonl"
+            path.parent.mkdir(exist_ok=True)
+            path.write_text("\n".join(json.dumps(r) for r in mission(index % 12)) + "\n")
+            scripts.append(str(path))
+        for count in (10, 100):
+            values = ",".join(str(v) for v in range(1, count + 1))
+            argv = ["/usr/bin/time", "-f", "%e %M", sys.executable, "-m", "medkit_replay.cli"]
+            argv += ["sweep", *scripts[:count], "--config", str(params), "--quiet"]
+            argv += [f"--vary=fault_manager.healing_threshold={values}"]
+            argv += ["--out", str(folder / f"tables{count}")]
+            done = subprocess.run(argv, check=True, capture_output=True, text=True)
+            seconds, kb = done.stderr.split()[-2:]
+            rss = int(kb) / 1024
+            print(f"{count * count:6,} rows: {float(seconds):6.2f} s, peak RSS {rss:.0f} MB")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--jobs", type=int, default=None, help="workers of the first sweep")
+    parser.add_argument("--memory", action="store_true", help="peak RSS of 100 and 10,000 rows")
     args = parser.parse_args()
+    if args.memory:
+        memory()
+        return
     with tempfile.TemporaryDirectory() as scratch:
         root = args.out if args.out is not None else Path(scratch)
         root.mkdir(parents=True, exist_ok=True)
