@@ -1,4 +1,4 @@
-"""Builds ``tuning_fleet/``: twelve JSON-lines missions with a known fault structure, to tune a
+"""Builds ``examples/tuning_fleet/``: twelve JSON-lines missions with a known fault structure, to tune a
 fault manager on (``sweep``) and to learn correlation rules from (``suggest-rules``).
 
 Deterministic (seeded, no wall clock). Every mission lasts ten minutes and holds:
@@ -11,7 +11,10 @@ Deterministic (seeded, no wall clock). Every mission lasts ten minutes and holds
   times in between, in every mission;
 - each fault passes again 5-30 s after it confirmed (so healing settings matter).
 
-Usage: ``python sample_bags/make_tuning_fleet.py [--out DIR]`` (default: beside this script).
+It lives in ``examples/``, not beside the sample bags, so that ``fleet sample_bags`` still finds
+the three sample recordings only.
+
+Usage: ``python sample_bags/make_tuning_fleet.py [--out DIR]`` (default: ``examples/``).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import json
 import random
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 FOLDER = "tuning_fleet"
 NS = 1_000_000_000
 MS = 1_000_000
@@ -115,7 +118,7 @@ def write_fleet(out: Path) -> list[Path]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=HERE)
+    parser.add_argument("--out", type=Path, default=EXAMPLES)
     args = parser.parse_args()
     for path in write_fleet(args.out):
         print(path)  # noqa: T201  # a script, not the package

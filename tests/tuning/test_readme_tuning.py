@@ -42,7 +42,7 @@ def test_the_tuning_section_shows_real_output(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     shutil.copytree(
-        ROOT / "sample_bags" / "tuning_fleet", tmp_path / "sample_bags" / "tuning_fleet"
+        ROOT / "examples" / "tuning_fleet", tmp_path / "examples" / "tuning_fleet"
     )
     monkeypatch.chdir(tmp_path)
     commands = shown_commands()

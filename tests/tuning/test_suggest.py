@@ -141,7 +141,7 @@ def test_validate_names_a_mute_whose_root_never_confirmed(
 
 def test_the_bundled_fleet_is_what_its_generator_writes(tmp_path: Path) -> None:
     written = write_fleet(tmp_path)
-    bundled = ROOT / "sample_bags" / FOLDER
+    bundled = ROOT / "examples" / FOLDER
     for path in [*written, tmp_path / FOLDER / "params.yaml"]:
         assert (bundled / path.name).read_bytes() == path.read_bytes(), path.name
     assert sorted(p.name for p in bundled.iterdir()) == sorted(
