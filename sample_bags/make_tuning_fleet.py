@@ -1,5 +1,5 @@
-"""Builds ``examples/tuning_fleet/``: twelve JSON-lines missions with a known fault structure, to tune a
-fault manager on (``sweep``) and to learn correlation rules from (``suggest-rules``).
+"""Builds ``examples/tuning_fleet/``: twelve JSON-lines missions with a known fault structure,
+to tune a fault manager on (``sweep``) and to learn correlation rules from (``suggest-rules``).
 
 Deterministic (seeded, no wall clock). Every mission lasts ten minutes and holds:
 
