@@ -41,9 +41,7 @@ def shown_commands() -> list[tuple[list[str], str]]:
 def test_the_tuning_section_shows_real_output(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    shutil.copytree(
-        ROOT / "examples" / "tuning_fleet", tmp_path / "examples" / "tuning_fleet"
-    )
+    shutil.copytree(ROOT / "examples" / "tuning_fleet", tmp_path / "examples" / "tuning_fleet")
     monkeypatch.chdir(tmp_path)
     commands = shown_commands()
     assert [argv[0] for argv, _ in commands] == ["suggest-rules", "sweep"]
