@@ -177,7 +177,12 @@ def sweep(
     if html_path is not None:
         from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
 
-        write_page(html_path, grid, outcome, len(recordings))
+        try:
+            write_page(html_path, grid, outcome, len(recordings))
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write the page: {err.strerror}", path=str(html_path)
+            ) from None
     if not quiet:
         with standard_output("the sweep summary"):
             parts = summary_renderables(

@@ -150,3 +150,13 @@ def test_outputs_may_not_overwrite_an_input(
     assert status == 2
     assert "--html" in err
     assert script.read_text().startswith("{")
+
+
+def test_an_unwritable_page_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    script = flapping(tmp_path / "wifi.jsonl")
+    page = tmp_path / "missing" / "sweep.html"
+    argv = ["sweep", str(script), "--vary", "fault_manager.healing_threshold=1", "--jobs", "1"]
+    status, _, err = run([*argv, "--html", str(page), "--quiet"], capsys)
+    assert status == 2
+    assert err.startswith(f"medkit-replay: error: {page}: cannot write the page")
+    assert err.count("\n") == 1
