@@ -152,6 +152,8 @@ class RunRow:
         muted_faults: faults muted as symptoms at the end.
         budget: ``pass`` or ``fail`` with ``--budget``, else empty; ``budget_failures`` the rules
             that did not hold, ``;``-separated.
+        input_warnings: what reading the input warned about (damage, refused messages): the
+            figures cover what could be read.
         error: why the input could not be replayed (the figures are then empty).
     """
 
@@ -174,6 +176,7 @@ class RunRow:
     muted_faults: int | None = None
     budget: str = ""
     budget_failures: str = ""
+    input_warnings: int | None = None
     error: str = ""
 
 
@@ -181,7 +184,12 @@ RUN_COLUMNS = tuple(f.name for f in fields(RunRow))
 
 
 def run_row(
-    manager: FaultManager, codes: list[CodeRow], messages: int, variant: str, input_label: str
+    manager: FaultManager,
+    codes: list[CodeRow],
+    messages: int,
+    variant: str,
+    input_label: str,
+    input_warnings: int = 0,
 ) -> RunRow:
     """The run's row from its code rows and the manager's running totals."""
     latencies = [c.detection_latency_ns for c in codes if c.detection_latency_ns is not None]
@@ -205,4 +213,5 @@ def run_row(
         muted_events=sum(c.muted_events for c in codes),
         near_misses=sum(c.near_misses for c in codes),
         muted_faults=len(correlation.muted_faults()) if correlation is not None else 0,
+        input_warnings=input_warnings,
     )

@@ -143,7 +143,9 @@ def _run_group(
     for run, timeline in zip(runs, fan.timelines, strict=True):
         variant_id = run.variant.id
         codes = run.tally.codes(run.manager, fan.last_ns, variant_id, job.label)
-        row = run_row(run.manager, codes, passed.messages, variant_id, job.label)
+        row = run_row(
+            run.manager, codes, passed.messages, variant_id, job.label, len(passed.warnings)
+        )
         if job.budget is not None:
             from medkit_replay.checks import evaluate  # noqa: PLC0415  # only with a budget
 

@@ -138,7 +138,7 @@ def test_an_unreadable_input_fails_its_rows_only(
     rows = (out / "runs.csv").read_text().splitlines()[1:]
     assert [r.split(",")[0] for r in rows] == ["v01", "v02", "v01", "v02"]
     assert all(str(bad) in r for r in rows[2:])
-    assert all(r.endswith(",,,") for r in rows[:2])
+    assert all(r.endswith(",,,0,") for r in rows[:2])
 
 
 def test_outputs_may_not_overwrite_an_input(
@@ -160,3 +160,19 @@ def test_an_unwritable_page_is_one_line(tmp_path: Path, capsys: pytest.CaptureFi
     assert status == 2
     assert err.startswith(f"medkit-replay: error: {page}: cannot write the page")
     assert err.count("\n") == 1
+
+
+def test_a_damaged_input_is_swept_as_far_as_it_reads_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    whole = (ROOT / "sample_bags" / "nav2_mission_mcap" / "nav2_mission_mcap.mcap").read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole[: len(whole) // 2])
+    out = tmp_path / "out"
+    argv = ["sweep", str(cut), "--out", str(out), "--jobs", "1", "--quiet"]
+    assert run([*argv, "--vary", "fault_manager.healing_enabled=true,false"], capsys)[0] == 0
+    header, *rows = (out / "runs.csv").read_text().splitlines()
+    warnings = header.split(",").index("input_warnings")
+    assert len(rows) == 2
+    assert all(int(row.split(",")[warnings]) >= 1 for row in rows)
+    assert all(row.endswith(",") for row in rows)  # no error: the readable part was swept
