@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import random
 from pathlib import Path
-from typing import TYPE_CHECKING
+
+import pytest
 
 from medkit_replay.cli import main
 from medkit_replay.config.correlation_file import load_correlation, parse_correlation_config
@@ -14,9 +15,6 @@ from medkit_replay.tuning.rules_file import rules_yaml
 from medkit_replay.tuning.suggest import rule_window, suggest
 from sample_bags.make_tuning_fleet import FOLDER, write_fleet
 from tests.fleet.fleet_support import report, write_script
-
-if TYPE_CHECKING:
-    import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -147,3 +145,37 @@ def test_the_bundled_fleet_is_what_its_generator_writes(tmp_path: Path) -> None:
     assert sorted(p.name for p in bundled.iterdir()) == sorted(
         [p.name for p in written] + ["params.yaml"]
     )
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--window-ms", "0"], "Invalid value for '--window-ms'"),
+        (["--min-support", "0"], "Invalid value for '--min-support'"),
+        (["--config", "missing.yaml"], "missing.yaml: config file not found"),
+    ],
+)
+def test_bad_usage_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], message: str
+) -> None:
+    script = write_script(tmp_path / "run.jsonl", [report(1.0, "PUMP_FAIL")])
+    assert main(["suggest-rules", str(script), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_no_recording_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "empty").mkdir()
+    assert main(["suggest-rules", str(tmp_path / "empty")]) == 2
+    assert "no recording found" in capsys.readouterr().err
+
+
+def test_rules_go_to_standard_output_without_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = write_script(tmp_path / "run.jsonl", [report(1.0, "PUMP_FAIL")])
+    assert main(["suggest-rules", str(script), "--jobs", "1"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.startswith("# Correlation rules proposed by medkit-replay")
+    assert "rules: []" in captured.out
+    assert captured.err.startswith("suggest-rules: 1 run(s) replayed; 0 hierarchical")
