@@ -16,7 +16,8 @@ the log bridge on (``medkit_replay: {enable_log_bridge: true}``), as bench_recor
   with the default workers (one per CPU) and with ``--jobs 1``.
 
 Each is run ``--repeat`` times, interleaved, and the fastest wall time kept (other work on the
-machine only slows a run down); the target is sweep <= 4x analyze. Peak RSS per command too.
+machine only slows a run down); the target is sweep <= 4x analyze. CPU time (user + system) is
+given for the commands that run in one process: on a loaded machine it is the steadier figure.
 
 Memory mode (``--memory``) sweeps ``healing_threshold`` over 10 values on 10 of the tuning
 fleet's missions (100 rows) and over 100 values on 100 missions (10,000 rows), writing the
