@@ -51,6 +51,10 @@ class TableWriter:
             atomic_text(folder / f"{name}.csv", newline="")
         )
         self._rows = csv.writer(self._csv, lineterminator="\n")
+        # Python's csv leaves a lone carriage return unquoted with \n line ends, and readers end
+        # the row there: a row holding one has its text quoted (outputs/csv_safety.py does the
+        # same per table).
+        self._quoted = csv.writer(self._csv, lineterminator="\n", quoting=csv.QUOTE_NONNUMERIC)
         self._rows.writerow(self.columns)
         self._pa = pyarrow
         self._batch: list[Sequence[object]] = []
@@ -72,7 +76,11 @@ class TableWriter:
 
     def write(self, row: Sequence[object]) -> None:
         """Append one row (values in column order; None is an empty cell, a null)."""
-        self._rows.writerow(["" if v is None else neutralise(v) for v in row])
+        cells = ["" if v is None else neutralise(v) for v in row]
+        if any(isinstance(v, str) and "\r" in v for v in cells):
+            self._quoted.writerow(cells)
+        else:
+            self._rows.writerow(cells)
         if self._parquet is not None:
             self._batch.append(row)
             if len(self._batch) >= ROW_GROUP:

@@ -3,6 +3,9 @@ byte-identical tables whatever the number of workers, budgets and failed inputs.
 
 from __future__ import annotations
 
+import csv
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -176,3 +179,23 @@ def test_a_damaged_input_is_swept_as_far_as_it_reads_and_says_so(
     assert len(rows) == 2
     assert all(int(row.split(",")[warnings]) >= 1 for row in rows)
     assert all(row.endswith(",") for row in rows)  # no error: the readable part was swept
+
+
+def test_a_carriage_return_in_a_cell_cannot_break_a_row(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = flapping(tmp_path / "we\rird.jsonl")
+    out = tmp_path / "out"
+    argv = ["sweep", str(script), "--out", str(out), "--jobs", "1", "--quiet"]
+    assert run([*argv, "--vary", "fault_manager.healing_threshold=1,2"], capsys)[0] == 0
+    with (out / "runs.csv").open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    assert len(rows) == 3
+    assert all(row[2] == str(script) for row in rows[1:])
+
+
+def test_the_command_line_starts_without_pandas_or_pyarrow() -> None:
+    heavy = "('pandas', 'pyarrow')"
+    code = f"import sys, medkit_replay.cli; print([m for m in {heavy} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    assert out.stdout.strip() == "[]"
