@@ -72,8 +72,8 @@ def trade_off_svg(totals: Sequence[VariantTotal]) -> str:
         f'<line class="axis" x1="{PAD}" y1="{HEIGHT - PAD}" x2="{WIDTH - PAD / 2}" '
         f'y2="{HEIGHT - PAD}"/>',
         f'<line class="axis" x1="{PAD}" y1="{PAD / 2}" x2="{PAD}" y2="{HEIGHT - PAD}"/>',
-        f'<text x="{WIDTH / 2}" y="{HEIGHT - 12}" text-anchor="middle">flaps (confirm-heal '
-        "cycles) &#8594; fewer is better</text>",
+        f'<text x="{WIDTH / 2}" y="{HEIGHT - 12}" text-anchor="middle">&#8592; fewer flaps '
+        "(confirm-heal cycles)</text>",
         f'<text x="14" y="{HEIGHT / 2}" text-anchor="middle" transform="rotate(-90 14 '
         f'{HEIGHT / 2})">faults confirmed &#8594;</text>',
     ]
@@ -105,7 +105,13 @@ def trade_off_svg(totals: Sequence[VariantTotal]) -> str:
         same = labels[(total.flaps, total.faults_confirmed)]
         if same[0] == total.variant:  # one label per spot: the variants there, best first
             text = ", ".join(same[:4]) + (f" +{len(same) - 4}" if len(same) > 4 else "")
-            parts.append(f'<text x="{x + 20:.1f}" y="{y + 4:.1f}">{esc(text)}</text>')
+            # Right of the dot in the left half, left of it in the right half: inside the frame.
+            left = x > WIDTH / 2
+            at = x - radius - 3 if left else x + radius + 3
+            anchor = "end" if left else "start"
+            parts.append(
+                f'<text x="{at:.1f}" y="{y + 4:.1f}" text-anchor="{anchor}">{esc(text)}</text>'
+            )
     parts.append("</svg>")
     return "\n".join(parts)
 
