@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -251,19 +252,38 @@ def check_names(base: ParameterSet, varies: Sequence[Vary], grid: Sequence[Varia
         )
 
 
+def yaml_value(value: ParamValue) -> str:
+    """A typed parameter value written so that a parameter file types it back the same
+    (strings double-quoted, doubles with a point or exponent, arrays in flow style)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return ".nan"
+        if math.isinf(value):
+            return ".inf" if value > 0 else "-.inf"
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    return "[" + ", ".join(yaml_value(item) for item in value) + "]"
+
+
 def variant_yaml(variant: Variant, folder: Path) -> str:
     """A ROS 2 parameter file that, given last after the base configs, makes this variant
     (``analyze --config base.yaml --config variants/v03.yaml``); file paths are written
     relative to ``folder``, where the file goes."""
-    lines = [f"# {variant.id}: {variant.label}"]
+    lines = [f"# {variant.id}: {variant.label}".replace("\n", " ").replace("\r", " ")]
     for node in sorted({s.node for s in variant.settings}):
         lines += [f"{node}:", "  ros__parameters:"]
         for setting in variant.settings:
             if setting.node != node:
                 continue
-            text = setting.text
-            if setting.node == "fault_manager" and setting.name in FILE_PARAMETERS:
-                value = str(setting.value)
-                text = json.dumps(os.path.relpath(value, folder.absolute()) if value else "")
-            lines.append(f"    {setting.name}: {text}")
+            value = setting.value
+            if setting.node == "fault_manager" and setting.name in FILE_PARAMETERS and value:
+                value = os.path.relpath(str(value), folder.absolute())
+            lines.append(f"    {json.dumps(setting.name)}: {yaml_value(value)}")
     return "\n".join(lines) + "\n"

@@ -105,8 +105,22 @@ def test_the_variant_file_reproduces_the_variant(
     folder.mkdir(parents=True)
     path = folder / "v01.yaml"
     path.write_text(variant_yaml(variant, folder))
-    assert '    correlation.config_file: "../../rules.yaml"' in path.read_text()
+    assert '    "correlation.config_file": "../../rules.yaml"' in path.read_text()
     params = load_parameters([path])
     assert params.node("log_bridge")["severity_floor"].value == 40
     named = params.node("fault_manager")["correlation.config_file"]
     assert (named.path.parent / str(named.value)).resolve() == rules
+
+
+@pytest.mark.parametrize(
+    "text", ["-3", "5.0", "1e-05", ".inf", "true", "'true'", "abc", "[a, b]", "[1, 2]", "- x"]
+)
+def test_a_variant_file_types_its_values_back_the_same(tmp_path: Path, text: str) -> None:
+    from medkit_replay.tuning.grid import Setting, Variant  # noqa: PLC0415
+
+    vary = parse_vary(f"log_bridge.some_value={text}")
+    (value,) = vary.values
+    variant = Variant(0, (Setting("log_bridge", "some_value", value, text),))
+    path = tmp_path / "v01.yaml"
+    path.write_text(variant_yaml(variant, tmp_path))
+    assert load_parameters([path]).node("log_bridge")["some_value"].value == value
