@@ -6,6 +6,7 @@ Thin: checks the grid (:mod:`medkit_replay.tuning.grid`), runs it
 
 from __future__ import annotations
 
+import importlib.util
 import sys
 from contextlib import nullcontext
 from pathlib import Path
@@ -144,9 +145,9 @@ def sweep(
             "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
             path=", ".join(str(d) for d in inputs),
         )
-    pyarrow = None
+    parquet = False
     if out_dir is not None:
-        pyarrow = _pyarrow()
+        parquet = _has_pyarrow()
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as err:
@@ -167,7 +168,7 @@ def sweep(
                 jobs=workers,
                 dask_address=dask_address,
                 timeout=timeout,
-                pyarrow=pyarrow,
+                parquet=parquet,
                 on_done=bar,
             )
     except OSError as err:
@@ -198,13 +199,12 @@ def sweep(
         click.get_current_context().exit(1)
 
 
-def _pyarrow() -> object:
-    """pyarrow, or None (the tables are then CSV only, said once)."""
-    try:
-        import pyarrow  # noqa: PLC0415  # optional and heavy
-    except ImportError:
-        from medkit_replay.outputs.parquet import EXTRA_HINT  # noqa: PLC0415  # pandas: only here
+def _has_pyarrow() -> bool:
+    """Whether pyarrow can be imported (not importing it yet); without it the tables are CSV
+    only, said once."""
+    if importlib.util.find_spec("pyarrow") is not None:
+        return True
+    from medkit_replay.outputs.parquet import EXTRA_HINT  # noqa: PLC0415  # pandas: only here
 
-        warn(f"pyarrow is not installed: tables written as CSV only ({EXTRA_HINT})")
-        return None
-    return pyarrow
+    warn(f"pyarrow is not installed: tables written as CSV only ({EXTRA_HINT})")
+    return False

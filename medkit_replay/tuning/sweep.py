@@ -122,7 +122,7 @@ def run_sweep(
     jobs: int = 1,
     dask_address: str | None = None,
     timeout: float | None = None,
-    pyarrow: Any = None,
+    parquet: bool = False,
     on_done: Callable[[int, SweepPart], None] | None = None,
 ) -> Outcome:
     """Run the planned jobs (``plan_jobs``) and write the tables to ``out_dir`` (if given).
@@ -141,19 +141,26 @@ def run_sweep(
     totals = Totals(grid.variants)
     failed: list[RunRow] = []
     writers: list[TableWriter] = []
-    if out_dir is not None:
-        writers = [
-            TableWriter(out_dir, name, _columns(grid, columns), _kinds(grid, record), pyarrow)
+
+    def open_writers() -> None:
+        # Opened with the first rows: by then the workers have started, so that they could be
+        # forked from this process before pyarrow started its threads.
+        if out_dir is not None and not writers:
             for name, columns, record in (
                 ("runs", RUN_COLUMNS, RunRow),
                 ("run_codes", CODE_COLUMNS, CodeRow),
-            )
-        ]
+            ):
+                writers.append(
+                    TableWriter(
+                        out_dir, name, _columns(grid, columns), _kinds(grid, record), parquet
+                    )
+                )
 
     run_values = attrgetter(*RUN_COLUMNS)
     code_values = attrgetter(*CODE_COLUMNS)
 
     def take(part: SweepPart) -> None:
+        open_writers()
         for row in part.runs:
             totals.add_run(row)
             if row.error:
@@ -181,10 +188,11 @@ def run_sweep(
             )
         else:
             run_jobs(plan, sweep_job, _failed_job, jobs=jobs, timeout=timeout, on_done=done)
+        open_writers()
         variant_totals = totals.variant_totals()
         code_totals = tuple(totals.code_totals())
         if out_dir is not None:
-            _write_totals(out_dir, grid, variant_totals, code_totals, settings, pyarrow)
+            _write_totals(out_dir, grid, variant_totals, code_totals, settings, parquet)
     except BaseException as err:
         for writer in writers:
             writer.__exit__(type(err), err, err.__traceback__)
@@ -208,20 +216,20 @@ def _write_totals(
     variants: Sequence[VariantTotal],
     codes: Sequence[CodeTotal],
     settings: dict[str, list[object]],
-    pyarrow: Any,
+    parquet: bool,
 ) -> None:
     """The variants table (ranked, best first) and the codes table; a parameter file per
     variant under ``variants/``."""
     variant_columns = ["rank", "variant", *(v.key for v in grid.varies), *VARIANT_COLUMNS[2:]]
     with TableWriter(
-        out_dir, "variants", variant_columns, _kinds(grid, VariantTotal), pyarrow
+        out_dir, "variants", variant_columns, _kinds(grid, VariantTotal), parquet
     ) as writer:
         variant_values = attrgetter(*VARIANT_COLUMNS)
         for total in variants:
             values = variant_values(total)
             writer.write((values[0], values[1], *settings[total.variant], *values[2:]))
     with TableWriter(
-        out_dir, "codes", _columns(grid, CODE_TOTAL_COLUMNS), _kinds(grid, CodeTotal), pyarrow
+        out_dir, "codes", _columns(grid, CODE_TOTAL_COLUMNS), _kinds(grid, CodeTotal), parquet
     ) as writer:
         code_values = attrgetter(*CODE_TOTAL_COLUMNS)
         for code in codes:

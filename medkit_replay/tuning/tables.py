@@ -37,12 +37,12 @@ def column_kinds(record: type[Any]) -> dict[str, str]:
 class TableWriter:
     """One table as ``NAME.csv`` and ``NAME.parquet`` in a folder, appended row by row.
 
-    ``pyarrow`` None writes the CSV only. Files appear (atomically) when the writer closes
-    without an error.
+    ``parquet`` False writes the CSV only (pyarrow is imported only when it is True). Files
+    appear (atomically) when the writer closes without an error.
     """
 
     def __init__(
-        self, folder: Path, name: str, columns: Sequence[str], kinds: dict[str, str], pyarrow: Any
+        self, folder: Path, name: str, columns: Sequence[str], kinds: dict[str, str], parquet: bool
     ) -> None:
         self.columns = list(columns)
         self.kinds = kinds
@@ -56,11 +56,13 @@ class TableWriter:
         # same per table).
         self._quoted = csv.writer(self._csv, lineterminator="\n", quoting=csv.QUOTE_NONNUMERIC)
         self._rows.writerow(self.columns)
-        self._pa = pyarrow
         self._batch: list[Sequence[object]] = []
         self._parquet: Any = None
-        if pyarrow is not None:
-            import pyarrow.parquet as pq  # noqa: PLC0415  # optional
+        if parquet:
+            import pyarrow  # noqa: PLC0415  # optional and heavy (and it starts threads)
+            import pyarrow.parquet as pq  # noqa: PLC0415
+
+            self._pa = pyarrow
 
             types = {
                 "int": pyarrow.int64(),

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from distributed import LocalCluster
 
 from medkit_replay.cli import main
+from tests.fleet.fleet_support import episode, write_script
 from tests.tuning.test_sweep_cli import BRINGUP, flapping
 
 if TYPE_CHECKING:
@@ -42,11 +43,14 @@ def test_dask_gives_the_local_tables(tmp_path: Path, capsys: pytest.CaptureFixtu
 def test_a_job_past_its_timeout_fails_its_rows(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    script = flapping(tmp_path / "run.jsonl")
-    args = ["sweep", str(script), "--vary", "fault_manager.healing_threshold=1,2"]
-    status = main([*args, "--jobs", "1", "--timeout", "0.001", "--out", str(tmp_path / "out")])
+    slow = write_script(
+        tmp_path / "slow.jsonl",
+        [line for n in range(40_000) for _, line in episode(f"C{n % 997}", 1.0 + n / 1000, None)],
+    )
+    args = ["sweep", str(slow), "--vary", "fault_manager.healing_threshold=1,2"]
+    status = main([*args, "--jobs", "1", "--timeout", "0.2", "--out", str(tmp_path / "out")])
     out = capsys.readouterr().out
     assert status == 0
-    assert "timedoutafter0.001s" in "".join(out.split())  # wrapped at 80 columns
+    assert "timedoutafter0.2s" in "".join(out.split())  # wrapped at 80 columns
     rows = (tmp_path / "out" / "runs.csv").read_text().splitlines()[1:]
-    assert len(rows) == 2 and all("timed out after 0.001 s" in r for r in rows)
+    assert len(rows) == 2 and all("timed out after 0.2 s" in r for r in rows)
