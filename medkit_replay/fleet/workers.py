@@ -18,7 +18,6 @@ from collections import deque
 from contextlib import suppress
 from functools import partial
 from multiprocessing.connection import wait
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from medkit_replay.fleet.run import failed_run, run_one
@@ -27,6 +26,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
     from multiprocessing.connection import Connection
     from multiprocessing.process import BaseProcess
+    from pathlib import Path
 
     from medkit_replay.checks import Budget
     from medkit_replay.fleet.run import RunSummary
@@ -49,31 +49,16 @@ def default_jobs() -> int:
 
 
 def _context() -> multiprocessing.context.BaseContext:
-    """How the next worker starts: forked from this process while it runs a single thread
-    (cheap: its modules are loaded already), else clean from a forkserver (or spawned):
-    forking a process that runs threads (the progress bar's, pyarrow's) is unsafe."""
+    """Workers started clean (forkserver where there is one, else spawn): forking a process
+    that runs threads (the progress bar's) is unsafe."""
     methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and _single_threaded():
-        return multiprocessing.get_context("fork")
     return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-
-
-def _single_threaded() -> bool:
-    """This process runs one thread, native ones included (Linux; elsewhere: assume not)."""
-    try:
-        return sum(1 for _ in Path("/proc/self/task").iterdir()) == 1
-    except OSError:
-        return False
 
 
 def _serve(connection: Connection, task: Callable[[Any], object]) -> None:
     """A worker process: say it is ready, then run the task on each ``(index, job)`` it is sent
     and send back its result."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    for name in ("SIGTERM", "SIGHUP"):  # a forked worker inherits the command's handlers
-        signum = getattr(signal, name, None)
-        if signum is not None:
-            signal.signal(signum, signal.SIG_DFL)
     connection.send(READY)
     while True:
         try:
@@ -233,6 +218,7 @@ class _Pool(Generic[J, R]):
 
     def run(self, count: int, timeout: float | None) -> None:
         items, failed, done = self.items, self.failed, self.done
+        context = _context()
         pending = deque(range(len(items)))
         attempts = [0] * len(items)
         remaining = len(items)
@@ -247,7 +233,7 @@ class _Pool(Generic[J, R]):
         try:
             while remaining:
                 while pending and len(pool) < count:
-                    pool.append(_Worker(_context(), self.task))
+                    pool.append(_Worker(context, self.task))
                 for worker in pool:
                     if worker.ready and worker.index is None and pending:
                         job = pending.popleft()

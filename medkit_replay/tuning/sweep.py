@@ -143,8 +143,7 @@ def run_sweep(
     writers: list[TableWriter] = []
 
     def open_writers() -> None:
-        # Opened with the first rows: by then the workers have started, so that they could be
-        # forked from this process before pyarrow started its threads.
+        # Opened with the first rows (pyarrow, when the tables have Parquet, loads then).
         if out_dir is not None and not writers:
             for name, columns, record in (
                 ("runs", RUN_COLUMNS, RunRow),

@@ -59,7 +59,7 @@ class TableWriter:
         self._batch: list[Sequence[object]] = []
         self._parquet: Any = None
         if parquet:
-            import pyarrow  # noqa: PLC0415  # optional and heavy (and it starts threads)
+            import pyarrow  # noqa: PLC0415  # optional and heavy
             import pyarrow.parquet as pq  # noqa: PLC0415
 
             self._pa = pyarrow
