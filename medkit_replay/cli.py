@@ -17,6 +17,8 @@ from medkit_replay.commands.explain import explain
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.follow import follow
 from medkit_replay.commands.streams import discard_stdout
+from medkit_replay.commands.suggest_rules import suggest_rules
+from medkit_replay.commands.sweep import sweep
 from medkit_replay.errors import MedkitReplayError, Terminated
 from medkit_replay.outputs.console import echo
 from medkit_replay.version import __version__
@@ -78,6 +80,8 @@ cli.add_command(diff)
 cli.add_command(explain)
 cli.add_command(fleet)
 cli.add_command(follow)
+cli.add_command(sweep)
+cli.add_command(suggest_rules)
 
 
 if __name__ == "__main__":

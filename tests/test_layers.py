@@ -119,6 +119,8 @@ HEAVY_AT_START = (
         ["explain", "--help"],
         ["fleet", "--help"],
         ["follow", "--help"],
+        ["sweep", "--help"],
+        ["suggest-rules", "--help"],
     ],
 )
 def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
@@ -171,6 +173,9 @@ ALLOWED: dict[str, set[str]] = {
     # diffing.render draws through outputs.console; compare and align import neither.
     "diffing": NEUTRAL | {"result", "files", "inputs", "outputs"},
     "fleet": NEUTRAL | {"result", "files", "inputs", "config", "pipeline", "checks", "outputs"},
+    # tuning drives several engines through the pipeline's one pass, and runs like a fleet.
+    "tuning": NEUTRAL
+    | {"result", "files", "spool", "config", "engine", "pipeline", "checks", "fleet", "outputs"},
     "pytest_plugin": NEUTRAL | {"result", "pipeline", "checks", "diffing", "outputs"},
     "commands": NEUTRAL
     | {
@@ -186,6 +191,7 @@ ALLOWED: dict[str, set[str]] = {
         "explaining",
         "trace",
         "evidence",
+        "tuning",
     },
     "cli": {"commands", "errors", "outputs", "version"},
     "__init__": {"errors", "version", "pipeline", "result", "outputs"},

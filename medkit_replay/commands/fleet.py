@@ -24,7 +24,9 @@ MAX_TIMEOUT = 10**9
 """Seconds: a longer --timeout is refused (some 30 years)."""
 
 
-def _timeout(_ctx: click.Context, _param: click.Parameter, value: float | None) -> float | None:
+def timeout_seconds(
+    _ctx: click.Context, _param: click.Parameter, value: float | None
+) -> float | None:
     if value is not None and not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT):
         raise click.BadParameter(f"must be a number of seconds above 0, at most {MAX_TIMEOUT}")
     return value
@@ -58,7 +60,7 @@ def _timeout(_ctx: click.Context, _param: click.Parameter, value: float | None) 
     "--timeout",
     type=float,
     default=None,
-    callback=_timeout,
+    callback=timeout_seconds,
     metavar="SECONDS",
     help="Kill a run that takes longer and report it as failed (runs in worker processes).",
 )

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import yaml
@@ -21,7 +22,6 @@ from medkit_replay.yaml_bounds import (
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
-    from pathlib import Path
 
 KNOWN_NODES = (
     "fault_manager",
@@ -163,6 +163,19 @@ def _collect(
             where = shown_text("/".join([*keys, key]))
             msg = f"{where}: expected a node name holding ros__parameters"
             raise ConfigError(msg, path=str(path), line=key_node.start_mark.line + 1)
+
+
+def parse_value(text: str, name: str, where: str) -> ParamValue:
+    """One parameter value written on a command line, typed as in a parameter file (``-3`` an
+    integer, ``3.0`` a double, ``'3'`` a string, ``[a, b]`` an array).
+
+    Raises:
+        ConfigError: not a single YAML scalar or flat array; ``where`` names the text.
+    """
+    node = compose_config(text, where)
+    if node is None:
+        return None
+    return _value(node, Path(where), name)
 
 
 def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:

@@ -1,7 +1,7 @@
 """A fleet on a Dask distributed cluster: ``run_one`` for every recording as a Dask task.
 
-With a per-run timeout each task replays its recording in a child process of its own
-(``run_isolated``), killed when the time is up.
+``run_jobs_on_dask`` runs any picklable task so (a sweep's runs too). With a per-run timeout
+each task runs in a child process of its own (``run_isolated``), killed when the time is up.
 """
 
 from __future__ import annotations
@@ -9,11 +9,12 @@ from __future__ import annotations
 import pickle
 import subprocess
 import sys
+from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar, cast
 
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.fleet.run import RunSummary, failed_run, run_kind, run_one
+from medkit_replay.fleet.run import RunSummary, describe_error, run_kind, run_one
 from medkit_replay.fleet.workers import death_text, seconds_text
 
 if TYPE_CHECKING:
@@ -31,32 +32,32 @@ READY_BYTE = b"R"
 
 
 _CHILD = "from medkit_replay.fleet.cluster import serve_one; serve_one()"
+J = TypeVar("J")
+R = TypeVar("R")
 
 
 def serve_one() -> None:
-    """The child of :func:`run_isolated`: says it has started, then replays the pickled job on
-    standard input and writes its summary, pickled, on standard output."""
+    """The child of :func:`run_isolated`: says it has started, then runs the pickled task on
+    the pickled job on standard input and writes its result, pickled, on standard output."""
     sys.stdout.buffer.write(READY_BYTE)
     sys.stdout.buffer.flush()
-    path, configs, budget, label = pickle.load(sys.stdin.buffer)  # from our own parent
-    summary = run_one(path, configs, budget, label)
-    sys.stdout.buffer.write(pickle.dumps(summary, protocol=pickle.HIGHEST_PROTOCOL))
+    task, job = pickle.load(sys.stdin.buffer)  # from our own parent
+    result = task(job)
+    sys.stdout.buffer.write(pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
     sys.stdout.buffer.flush()
 
 
 def run_isolated(
-    path: str | Path,
-    configs: Sequence[str | Path] = (),
-    budget: Budget | None = None,
-    label: str | None = None,
+    job: J,
+    task: Callable[[J], R],
+    failed: Callable[[J, str], R],
     timeout: float | None = None,
-) -> RunSummary:
-    """``run_one`` in a child process of its own, killed after ``timeout`` seconds (counted once
-    it has started): what a Dask task runs when the fleet has a per-run timeout (a thread
-    cannot be stopped, and a daemonic Dask worker may not use multiprocessing). A child that
-    dies or runs out of time is this run's failure."""
-    shown = str(path) if label is None else label
-    job = pickle.dumps((str(path), tuple(str(c) for c in configs), budget, label))
+) -> R:
+    """``task(job)`` in a child process of its own, killed after ``timeout`` seconds (counted
+    once it has started): what a Dask task runs when the runs have a timeout (a thread cannot
+    be stopped, and a daemonic Dask worker may not use multiprocessing). A child that dies or
+    runs out of time is this run's failure, ``failed(job, why)``."""
+    payload = pickle.dumps((task, job))
     child = subprocess.Popen(  # our own interpreter and module
         [sys.executable, "-c", _CHILD],
         stdin=subprocess.PIPE,
@@ -67,18 +68,16 @@ def run_isolated(
         assert child.stdout is not None
         output = b""
         if child.stdout.read(len(READY_BYTE)) == READY_BYTE:
-            output, _ = child.communicate(job, timeout=timeout)
+            output, _ = child.communicate(payload, timeout=timeout)
         child.wait()
     except subprocess.TimeoutExpired:
         problem = f"timed out after {seconds_text(timeout or 0)} s"
     else:
         if child.returncode == 0:
             try:
-                summary = pickle.loads(output)  # from our own child
+                return cast("R", pickle.loads(output))  # from our own child
             except Exception:  # a truncated pickle: the child did not finish
-                summary = None
-            if isinstance(summary, RunSummary):
-                return summary
+                pass
         problem = f"worker died: {death_text(child.returncode)}"
     finally:
         if child.poll() is None:
@@ -87,7 +86,20 @@ def run_isolated(
         for stream in (child.stdin, child.stdout):
             if stream is not None:
                 stream.close()
-    return RunSummary(path=shown, kind=run_kind(Path(path)), error=f"{shown}: {problem}")
+    return failed(job, problem)
+
+
+def _run_labelled(
+    job: tuple[str, str], configs: tuple[str, ...], budget: Budget | None
+) -> RunSummary:
+    """``run_one`` on an absolute path, its summary naming the path as it was found."""
+    path, label = job
+    return run_one(path, configs, budget, label)
+
+
+def _failed_labelled(job: tuple[str, str], problem: str) -> RunSummary:
+    path, label = job
+    return RunSummary(path=label, kind=run_kind(Path(path)), error=f"{label}: {problem}")
 
 
 def run_on_dask(
@@ -111,6 +123,39 @@ def run_on_dask(
         MedkitReplayError: the ``distributed`` package is missing, or the scheduler cannot be
             reached.
     """
+    results: list[RunSummary | None] = [None] * len(paths)
+
+    def done(index: int, summary: RunSummary) -> None:
+        results[index] = summary
+        if on_done is not None:
+            on_done(index, summary)
+
+    absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
+    jobs = [(str(p.absolute()), str(p)) for p in paths]
+    task = partial(_run_labelled, configs=absolute_configs, budget=budget)
+    run_jobs_on_dask(address, jobs, task, _failed_labelled, timeout=timeout, on_done=done)
+    return [r for r in results if r is not None]
+
+
+def run_jobs_on_dask(
+    address: str,
+    jobs: Sequence[J],
+    task: Callable[[J], R],
+    failed: Callable[[J, str], R],
+    *,
+    timeout: float | None = None,
+    on_done: Callable[[int, R], None],
+) -> None:
+    """Run ``task`` on every job as a Dask task; ``on_done(index, result)`` as each ends.
+
+    ``task`` and ``failed`` must pickle (module-level functions or partials of them);
+    ``failed(job, why)`` stands for a run whose task was lost (a ``KilledWorker``) or, with
+    ``timeout``, whose child process died or ran out of time.
+
+    Raises:
+        MedkitReplayError: the ``distributed`` package is missing, or the scheduler cannot be
+            reached.
+    """
     client_type = dask_client_type()
     try:
         client = client_type(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
@@ -121,33 +166,22 @@ def run_on_dask(
         ) from None
     from distributed import as_completed as dask_as_completed  # noqa: PLC0415  # optional
 
-    results: list[RunSummary | None] = [None] * len(paths)
     try:
-        absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
-        arguments: list[list[object]] = [
-            [str(p.absolute()) for p in paths],
-            [absolute_configs] * len(paths),
-            [budget] * len(paths),
-            [str(p) for p in paths],
-        ]
         if timeout is None:
-            futures = client.map(run_one, *arguments, pure=False)
+            futures = client.map(task, list(jobs), pure=False)
         else:
-            arguments.append([timeout] * len(paths))
-            futures = client.map(run_isolated, *arguments, pure=False)
+            isolated = partial(run_isolated, task=task, failed=failed, timeout=timeout)
+            futures = client.map(isolated, list(jobs), pure=False)
         index_of = {future.key: index for index, future in enumerate(futures)}
         for future in dask_as_completed(futures, loop=client.loop):  # type: ignore[no-untyped-call]
             index = index_of[future.key]
             try:
-                summary = future.result()
+                result = future.result()
             except Exception as err:  # a lost worker (KilledWorker), a cancelled task
-                summary = failed_run(paths[index], err)
-            results[index] = summary
-            if on_done is not None:
-                on_done(index, summary)
+                result = failed(jobs[index], describe_error(err))
+            on_done(index, result)
     finally:
         client.close()  # type: ignore[no-untyped-call]
-    return [r for r in results if r is not None]
 
 
 def dask_client_type() -> type[Client]:

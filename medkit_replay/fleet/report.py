@@ -153,7 +153,7 @@ def write_report(runs: Sequence[RunSummary], out_dir: Path) -> list[Path]:
 
 # --- HTML -------------------------------------------------------------------------------------
 
-_STYLE = """
+PAGE_STYLE = """
 body { font: 14px/1.4 system-ui, sans-serif; margin: 1.5em; color: #222; }
 h1 { font-size: 1.4em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
 table { border-collapse: collapse; margin-top: .5em; }
@@ -168,7 +168,7 @@ dl { display: grid; grid-template-columns: max-content auto; gap: .1em 1em; }
 dt { font-weight: bold; } dd { margin: 0; }
 """
 
-_SCRIPT = """
+SORT_SCRIPT = """
 document.querySelectorAll("table.sortable").forEach(function (table) {
   table.querySelectorAll("th").forEach(function (th, column) {
     th.addEventListener("click", function () {
@@ -318,7 +318,7 @@ def render_html(
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         "<title>medkit-replay fleet report</title>\n"
-        f"<style>{_STYLE}</style>\n</head>\n<body>\n"
+        f"<style>{PAGE_STYLE}</style>\n</head>\n<body>\n"
         "<h1>medkit-replay fleet report</h1>\n"
         f"<p>medkit-replay {html.escape(__version__)}; click a column heading to sort.</p>\n"
         f"<dl>{facts}</dl>\n"
@@ -326,5 +326,5 @@ def render_html(
         f"{codes_html}\n"
         "<h2>Runs</h2>\n"
         f"{runs_html}\n"
-        f"<script>{_SCRIPT}</script>\n</body>\n</html>\n"
+        f"<script>{SORT_SCRIPT}</script>\n</body>\n</html>\n"
     )

@@ -163,7 +163,7 @@ def run_one(
     except FileRefusedError as err:
         error = f"{path}: {err}"
     except Exception as err:  # one recording must not end the fleet
-        error = f"{path}: {_describe(err)}"
+        error = f"{path}: {describe_error(err)}"
     else:
         if problem is None:
             return summary
@@ -176,7 +176,7 @@ def run_one(
     return RunSummary(path=shown, kind=kind, error=error)
 
 
-def _describe(error: BaseException) -> str:
+def describe_error(error: BaseException) -> str:
     """An exception on one line: its type, and its text when it has one."""
     try:
         text = " ".join(str(error).split())
@@ -217,5 +217,5 @@ def summary_problem(summary: RunSummary) -> str | None:
 
 def failed_run(path: Path, error: BaseException | str) -> RunSummary:
     """A run that failed outside ``run_one`` (its worker died or ran out of time)."""
-    problem = error if isinstance(error, str) else _describe(error)
+    problem = error if isinstance(error, str) else describe_error(error)
     return RunSummary(path=str(path), kind=run_kind(path), error=f"{path}: {problem}")

@@ -9,19 +9,12 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, TextIO
 
 from rich import box
-from rich.console import Console, Group
+from rich.console import Group
 from rich.padding import Padding
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 from rich.text import Text
 
+from medkit_replay.fleet.progress import FleetProgress, fleet_progress
 from medkit_replay.fleet.report import FILES, is_missing
 from medkit_replay.fleet.stats import codes_table, overview
 from medkit_replay.outputs.console import literal_console, plain_text
@@ -30,12 +23,12 @@ from medkit_replay.text import printable
 if TYPE_CHECKING:
     from collections.abc import Sequence
     from pathlib import Path
-    from types import TracebackType
-    from typing import Self
 
     from rich.console import RenderableType
 
     from medkit_replay.fleet.run import RunSummary
+
+__all__ = ["FleetProgress", "fleet_progress", "print_summary", "render_summary"]
 
 MAX_RUN_ROWS = 40
 """Runs listed on the terminal; the files have all of them."""
@@ -166,60 +159,3 @@ def print_summary(runs: Sequence[RunSummary], stream: TextIO, out_dir: Path | No
         console.print(Group(*summary_renderables(runs, out_dir)))
         return
     stream.write(render_summary(runs, out_dir))
-
-
-# --- progress ---------------------------------------------------------------------------------
-
-
-class FleetProgress:
-    """A bar counting finished runs, on standard error; a context manager, and the
-    ``on_done`` callback of the executors."""
-
-    def __init__(self, stream: TextIO, total: int) -> None:
-        console = Console(file=stream, highlight=False, emoji=False, markup=False)
-        self._progress = Progress(
-            TextColumn("{task.description}"),
-            BarColumn(bar_width=30),
-            MofNCompleteColumn(),
-            TextColumn("{task.fields[failed]}"),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=console,
-            transient=True,
-            redirect_stdout=False,
-            redirect_stderr=False,
-            refresh_per_second=8,
-        )
-        self._task = self._progress.add_task("replaying", total=total, failed="")
-        self._failed = 0
-
-    def __enter__(self) -> Self:
-        self._progress.start()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self._progress.stop()
-
-    def __call__(self, index: int, run: RunSummary) -> None:
-        """One more run finished."""
-        self._failed += 0 if run.ok else 1
-        failed = f"{self._failed} failed" if self._failed else ""
-        self._progress.update(self._task, advance=1, failed=failed)
-
-
-def fleet_progress(stream: TextIO, total: int, *, quiet: bool = False) -> FleetProgress | None:
-    """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal."""
-    if quiet:
-        return None
-    isatty = getattr(stream, "isatty", None)
-    if isatty is None or not isatty():
-        return None
-    console = Console(file=stream)
-    if not console.is_terminal or console.is_dumb_terminal:
-        return None
-    return FleetProgress(stream, total)

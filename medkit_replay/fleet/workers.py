@@ -1,9 +1,11 @@
 """A fleet's local executor: ``run_one`` for every recording, in this process or in workers.
 
-Summaries come back in input order whatever order the runs finish in. A worker process that
-dies (the OOM killer, a resource limit) or a run past its ``timeout`` costs only that run: the
-dead run is tried once more in a fresh worker, a run that timed out is killed with its worker,
-and the others go on.
+``run_jobs`` is the pool itself, for any picklable task (a sweep's runs use it too); ``run_all``
+is the fleet's use of it. Summaries come back in input order whatever order the runs finish in. A
+worker process that
+dies (the OOM killer, a resource limit) or a run past its ``timeout`` costs
+only that run: the dead run is tried once more in a fresh worker, a run that timed out is killed
+with its worker, and the others go on.
 """
 
 from __future__ import annotations
@@ -14,8 +16,9 @@ import signal
 import time
 from collections import deque
 from contextlib import suppress
+from functools import partial
 from multiprocessing.connection import wait
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from medkit_replay.fleet.run import failed_run, run_one
 
@@ -27,6 +30,9 @@ if TYPE_CHECKING:
 
     from medkit_replay.checks import Budget
     from medkit_replay.fleet.run import RunSummary
+
+J = TypeVar("J")
+R = TypeVar("R")
 
 ATTEMPTS = 2
 """How often a run whose worker died is tried before it is reported as failed."""
@@ -49,9 +55,9 @@ def _context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
-def _serve(connection: Connection, configs: tuple[Path, ...], budget: Budget | None) -> None:
-    """A worker process: say it is ready, then replay each ``(index, path)`` it is sent and
-    send back its summary."""
+def _serve(connection: Connection, task: Callable[[Any], object]) -> None:
+    """A worker process: say it is ready, then run the task on each ``(index, job)`` it is sent
+    and send back its result."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     connection.send(READY)
     while True:
@@ -61,8 +67,8 @@ def _serve(connection: Connection, configs: tuple[Path, ...], budget: Budget | N
             return
         if job is None:
             return
-        index, path = job
-        connection.send((index, run_one(path, configs, budget)))
+        index, item = job
+        connection.send((index, task(item)))
 
 
 def death_text(exitcode: int | None) -> str:
@@ -88,15 +94,12 @@ class _Worker:
     """One worker process, the pipe to it, and the run it is busy with."""
 
     def __init__(
-        self,
-        context: multiprocessing.context.BaseContext,
-        configs: tuple[Path, ...],
-        budget: Budget | None,
+        self, context: multiprocessing.context.BaseContext, task: Callable[[Any], object]
     ) -> None:
         parent, child = context.Pipe()
         self.connection: Connection = parent
         self.process: BaseProcess = context.Process(  # type: ignore[attr-defined]
-            target=_serve, args=(child, configs, budget), daemon=True
+            target=_serve, args=(child, task), daemon=True
         )
         self.process.start()
         child.close()
@@ -105,10 +108,10 @@ class _Worker:
         self.index: int | None = None
         self.deadline: float | None = None
 
-    def give(self, index: int, path: Path, timeout: float | None) -> None:
+    def give(self, index: int, job: object, timeout: float | None) -> None:
         self.index = index
         self.deadline = None if timeout is None else time.monotonic() + timeout
-        self.connection.send((index, path))
+        self.connection.send((index, job))
 
     def receive(self) -> object:
         """What the worker sent; None when it died before sending it whole."""
@@ -157,7 +160,6 @@ def run_all(
         One summary per path, in the order of ``paths``. A run whose worker died twice (see
         ``ATTEMPTS``) or that timed out is a failed summary naming why.
     """
-    workers = min(jobs or default_jobs(), len(paths))
     results: list[RunSummary | None] = [None] * len(paths)
 
     def done(index: int, summary: RunSummary) -> None:
@@ -165,93 +167,124 @@ def run_all(
         if on_done is not None:
             on_done(index, summary)
 
-    if workers <= 1 and timeout is None:
-        for index, path in enumerate(paths):
-            done(index, run_one(path, configs, budget))
-        return [r for r in results if r is not None]
-    _run_in_workers(paths, tuple(configs), budget, max(workers, 1), timeout, done)
+    task = partial(run_one, configs=tuple(configs), budget=budget)
+    run_jobs(paths, task, failed_run, jobs=jobs, timeout=timeout, on_done=done)
     return [r for r in results if r is not None]
 
 
-def _run_in_workers(
-    paths: Sequence[Path],
-    configs: tuple[Path, ...],
-    budget: Budget | None,
-    count: int,
-    timeout: float | None,
-    done: Callable[[int, RunSummary], None],
+def run_jobs(
+    items: Sequence[J],
+    task: Callable[[J], R],
+    failed: Callable[[J, str], R],
+    *,
+    jobs: int | None = None,
+    timeout: float | None = None,
+    on_done: Callable[[int, R], None],
 ) -> None:
-    """Hand runs to ``count`` worker processes one at a time; replace a worker that dies
-    (its run tried again, up to ATTEMPTS) or runs out of time (its run failed)."""
-    context = _context()
-    pending = deque(range(len(paths)))
-    attempts = [0] * len(paths)
-    remaining = len(paths)
-    pool: list[_Worker] = []
-    stillborn = 0
+    """Run ``task`` on every item, ``jobs`` at a time in worker processes (1 and no
+    ``timeout``: in this process); ``on_done(index, result)`` is called in this process as
+    each ends, in the order they end.
 
-    def finish(index: int, summary: RunSummary) -> None:
-        nonlocal remaining
-        remaining -= 1
-        done(index, summary)
+    Args:
+        items: what each run is given (picklable).
+        task: a picklable callable (a module-level function or a ``partial`` of one) that never
+            raises for its item's sake.
+        failed: the result of a run whose worker died twice or that ran out of time, from
+            its item and why (``worker died: killed by SIGKILL``).
+        jobs: worker processes (default: one per CPU; never more than items).
+        timeout: seconds a run may take; a run past it is killed and reported as failed.
+        on_done: receives each result.
+    """
+    workers = min(jobs or default_jobs(), len(items))
+    if workers <= 1 and timeout is None:
+        for index, item in enumerate(items):
+            on_done(index, task(item))
+        return
+    _Pool(items, task, failed, on_done).run(max(workers, 1), timeout)
 
-    try:
-        while remaining:
-            while pending and len(pool) < count:
-                pool.append(_Worker(context, configs, budget))
-            for worker in pool:
-                if worker.ready and worker.index is None and pending:
-                    job = pending.popleft()
-                    attempts[job] += 1
-                    with suppress(OSError):  # it died idle: its sentinel says so below
-                        worker.give(job, paths[job], timeout)
-            watched = [w for w in pool if w.index is not None or not w.ready]
-            if not watched:
-                break  # cannot happen: every run is pending, busy or done
-            waiting: list[Any] = [w.connection for w in watched]
-            waiting += [w.process.sentinel for w in watched]
-            deadlines = [w.deadline for w in watched if w.deadline is not None]
-            wait_for = max(min(deadlines) - time.monotonic(), 0) if deadlines else None
-            ready = set(wait(waiting, wait_for))
-            now = time.monotonic()
-            for worker in watched:
-                index = worker.index
-                if worker.connection in ready:
-                    message = worker.receive()
-                    if message == READY and not worker.ready:
-                        worker.ready = True
-                        stillborn = 0
+
+class _Pool(Generic[J, R]):
+    """Runs handed to worker processes one at a time; a worker that dies is replaced (its run
+    tried again, up to ATTEMPTS), one that runs out of time is killed (its run failed)."""
+
+    def __init__(
+        self,
+        items: Sequence[J],
+        task: Callable[[J], R],
+        failed: Callable[[J, str], R],
+        done: Callable[[int, R], None],
+    ) -> None:
+        self.items, self.task, self.failed, self.done = items, task, failed, done
+
+    def run(self, count: int, timeout: float | None) -> None:
+        items, failed, done = self.items, self.failed, self.done
+        context = _context()
+        pending = deque(range(len(items)))
+        attempts = [0] * len(items)
+        remaining = len(items)
+        pool: list[_Worker] = []
+        stillborn = 0
+
+        def finish(index: int, result: R) -> None:
+            nonlocal remaining
+            remaining -= 1
+            done(index, result)
+
+        try:
+            while remaining:
+                while pending and len(pool) < count:
+                    pool.append(_Worker(context, self.task))
+                for worker in pool:
+                    if worker.ready and worker.index is None and pending:
+                        job = pending.popleft()
+                        attempts[job] += 1
+                        with suppress(OSError):  # it died idle: its sentinel says so below
+                            worker.give(job, items[job], timeout)
+                watched = [w for w in pool if w.index is not None or not w.ready]
+                if not watched:
+                    break  # cannot happen: every run is pending, busy or done
+                waiting: list[Any] = [w.connection for w in watched]
+                waiting += [w.process.sentinel for w in watched]
+                deadlines = [w.deadline for w in watched if w.deadline is not None]
+                wait_for = max(min(deadlines) - time.monotonic(), 0) if deadlines else None
+                ready = set(wait(waiting, wait_for))
+                now = time.monotonic()
+                for worker in watched:
+                    index = worker.index
+                    if worker.connection in ready:
+                        message = worker.receive()
+                        if message == READY and not worker.ready:
+                            worker.ready = True
+                            stillborn = 0
+                            continue
+                        if isinstance(message, tuple) and index is not None:
+                            worker.index = worker.deadline = None
+                            finish(index, message[1])
+                            continue
+                    elif worker.process.sentinel not in ready:
+                        if worker.deadline is None or now < worker.deadline or index is None:
+                            continue
+                        worker.stop(kill=True)
+                        pool.remove(worker)
+                        late = f"timed out after {seconds_text(timeout or 0)} s"
+                        finish(index, failed(items[index], late))
                         continue
-                    if isinstance(message, tuple) and index is not None:
-                        worker.index = worker.deadline = None
-                        finish(index, message[1])
-                        continue
-                elif worker.process.sentinel not in ready:
-                    if worker.deadline is None or now < worker.deadline or index is None:
-                        continue
+                    worker.process.join()
+                    how = death_text(worker.process.exitcode)
                     worker.stop(kill=True)
                     pool.remove(worker)
-                    finish(
-                        index,
-                        failed_run(paths[index], f"timed out after {seconds_text(timeout or 0)} s"),
-                    )
-                    continue
-                worker.process.join()
-                how = death_text(worker.process.exitcode)
-                worker.stop(kill=True)
-                pool.remove(worker)
-                if index is None:
-                    stillborn += 1
-                    if stillborn >= ATTEMPTS + 1:  # workers cannot even start: say so per run
-                        while pending:
-                            job = pending.popleft()
-                            finish(job, failed_run(paths[job], f"worker died at start: {how}"))
-                    continue
-                if attempts[index] < ATTEMPTS:
-                    pending.appendleft(index)
-                    continue
-                tries = " (also when run again in a new worker)" if ATTEMPTS > 1 else ""
-                finish(index, failed_run(paths[index], f"worker died: {how}{tries}"))
-    finally:
-        for worker in pool:
-            worker.stop(kill=worker.index is not None or not worker.ready)
+                    if index is None:
+                        stillborn += 1
+                        if stillborn >= ATTEMPTS + 1:  # workers cannot even start: say so per run
+                            while pending:
+                                job = pending.popleft()
+                                finish(job, failed(items[job], f"worker died at start: {how}"))
+                        continue
+                    if attempts[index] < ATTEMPTS:
+                        pending.appendleft(index)
+                        continue
+                    tries = " (also when run again in a new worker)" if ATTEMPTS > 1 else ""
+                    finish(index, failed(items[index], f"worker died: {how}{tries}"))
+        finally:
+            for worker in pool:
+                worker.stop(kill=worker.index is not None or not worker.ready)

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from typing import IO, TYPE_CHECKING, Literal
 
-from pandas.api.types import is_bool_dtype, is_numeric_dtype
-
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -29,6 +27,9 @@ def neutralise(value: object) -> object:
 
 
 def _text_columns(frame: pd.DataFrame) -> list[str]:
+    # pandas only here: a writer of plain rows (a sweep's tables) imports this module without it.
+    from pandas.api.types import is_bool_dtype, is_numeric_dtype  # noqa: PLC0415
+
     return [
         column
         for column in frame.columns

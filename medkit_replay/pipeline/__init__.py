@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from medkit_replay.config.effective import effective_config
 from medkit_replay.config.fault_manager import fault_manager_config
@@ -37,18 +37,21 @@ from medkit_replay.parity import compare, compare_responses, suggest_action_sour
 from medkit_replay.pipeline.assemble import assemble_result
 from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
-from medkit_replay.pipeline.routing import Gate, Router, recorded_report_codes
+from medkit_replay.pipeline.routing import Gate, Request, Router, recorded_report_codes
 from medkit_replay.pipeline.tracing import Tracer
 from medkit_replay.spool import Row, Spool
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
+    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.inputs.follow import Follow
+    from medkit_replay.model import InputSummary
+    from medkit_replay.pipeline.loop import Clock
     from medkit_replay.result import Result
     from medkit_replay.trace import FaultTrace
 
-__all__ = ["PROGRESS_EVERY", "Phase", "Progress", "replay"]
+__all__ = ["PROGRESS_EVERY", "Pass", "Phase", "Progress", "replay", "replay_pass"]
 
 PROGRESS_EVERY = 2048
 """Messages read between two calls of a replay's ``progress`` callback (by default)."""
@@ -118,30 +121,21 @@ def replay(
     manager.set_row_sinks(reports.row_sink(), event_sink, transition_sink)
     timeline = Timeline(manager)
     router = Router(options)
-    tracer = Tracer(trace, manager, router) if trace is not None else None
-    recorded_codes = (
-        recorded_report_codes(paths, progress, progress_every) if follow is None else set()
-    )
-    gate = Gate(timeline, recorded_codes, learn=follow is not None)
-    if tracer is not None:
-        tracer.attach(gate)
-    rosout = router.log is not None
-    rosout_topic = router.log.topic if router.log is not None else "/rosout"
-    with open_recording(
+    tracer = Tracer(trace, timeline, router) if trace is not None else None
+    run = replay_pass(
         paths,
-        rosout=rosout,
-        diagnostics_topics=(router.diagnostic.topic,),
-        rosout_topic=rosout_topic,
+        router,
+        timeline,
+        timeline.apply,
+        manager.report_fields,
+        (reports, events, transitions),
+        progress,
+        progress_every,
         follow=follow,
-    ) as recording:
-        meter = (
-            Meter(progress, "replay", recording, progress_every) if progress is not None else None
-        )
-        messages = replay_loop(recording, meter, timeline, router, gate, tracer)
-        warnings += recording.warnings
-        summaries = recording.inputs
-        if meter is not None:
-            meter.finish(messages, timeline.last_ns)
+        tracer=tracer,
+    )
+    gate, messages, summaries = run.gate, run.messages, run.summaries
+    warnings += run.warnings
     if follow is not None and gate.late_codes:
         late = ", ".join(sorted(gate.late_codes))
         if follow.finished:
@@ -170,6 +164,8 @@ def replay(
                 "introspection); they cannot be replayed"
             )
     if messages == 0:
+        rosout = router.log is not None
+        rosout_topic = router.log.topic if router.log is not None else "/rosout"
         logs = sum(
             t.messages
             for s in summaries
@@ -242,3 +238,64 @@ def _tee(
         live(decode(row))
 
     return both
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Pass:
+    """What one pass over a recording leaves besides the engine's records.
+
+    Attributes:
+        messages: messages read.
+        gate: the double-counting gate, with what it withheld.
+        warnings: the recording's own warnings (damage, refusals).
+        summaries: one summary per input.
+    """
+
+    messages: int
+    gate: Gate
+    warnings: list[str]
+    summaries: tuple[InputSummary, ...]
+
+
+def replay_pass(
+    paths: Sequence[Path],
+    router: Router,
+    clock: Clock,
+    apply: Callable[[Request], object],
+    report_fields: ReportSink,
+    spools: Sequence[Spool[Any]] = (),
+    progress: Callable[[Progress], None] | None = None,
+    progress_every: int = PROGRESS_EVERY,
+    *,
+    follow: Follow | None = None,
+    tracer: Tracer | None = None,
+) -> Pass:
+    """Read the recording once, in time order, through the router's bridges into the engine.
+
+    The engine is whatever ``clock``, ``apply`` and ``report_fields`` drive: one manager's
+    Timeline (``replay``), or several managers fed the same requests (a sweep's fan-out).
+    ``spools`` are settled as the loop goes. With ``follow`` the recording is read while it
+    is written (recorded ReportFault codes learnt as they arrive); a ``tracer`` (``explain``)
+    watches the pass.
+    """
+    recorded_codes = (
+        recorded_report_codes(paths, progress, progress_every) if follow is None else set()
+    )
+    gate = Gate(apply, report_fields, recorded_codes, learn=follow is not None)
+    if tracer is not None:
+        tracer.attach(gate)
+    rosout_topic = router.log.topic if router.log is not None else "/rosout"
+    with open_recording(
+        paths,
+        rosout=router.log is not None,
+        diagnostics_topics=(router.diagnostic.topic,),
+        rosout_topic=rosout_topic,
+        follow=follow,
+    ) as recording:
+        meter = (
+            Meter(progress, "replay", recording, progress_every) if progress is not None else None
+        )
+        messages = replay_loop(recording, meter, clock, router, gate, spools, tracer)
+        if meter is not None:
+            meter.finish(messages, clock.last_ns)
+        return Pass(messages, gate, list(recording.warnings), tuple(recording.inputs))

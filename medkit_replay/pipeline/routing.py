@@ -26,7 +26,6 @@ if TYPE_CHECKING:
 
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.config.replay_options import ReplayOptions
-    from medkit_replay.engine.timeline import Timeline
     from medkit_replay.model import Origin, Progress
 
 Request = ReportRequest | ClearRequest
@@ -106,15 +105,22 @@ class Gate:
     """The double-counting rule between bridges and the manager: recorded service traffic wins.
 
     A bridge's request for a code also present in recorded ReportFault calls is withheld.
-    With ``learn`` (a recording followed while written, which cannot be scanned ahead) the
-    codes are learnt as the recorded calls arrive; ``late_codes`` are those some bridge had
-    already reported before, which the rule would have withheld.
+    What passes goes to ``apply`` (request objects: a Timeline's) or ``report_fields`` (a
+    bridge's fields: a manager's, or a sweep's fan-out to several). With ``learn`` (a
+    recording followed while written, which cannot be scanned ahead) the codes are learnt as
+    the recorded calls arrive; ``late_codes`` are those some bridge had already reported
+    before, which the rule would have withheld.
     """
 
     def __init__(
-        self, timeline: Timeline, recorded_codes: set[str], *, learn: bool = False
+        self,
+        apply: Callable[[Request], object],
+        report_fields: ReportSink,
+        recorded_codes: set[str],
+        *,
+        learn: bool = False,
     ) -> None:
-        self.timeline = timeline
+        self._apply = apply
         self.recorded_codes = recorded_codes
         self.withheld: Counter[str] = Counter()
         self.withheld_codes: dict[str, set[str]] = {}
@@ -123,7 +129,6 @@ class Gate:
         self.learn = learn
         self.bridge_codes: set[str] = set()
         self.late_codes: set[str] = set()
-        report_fields = timeline.manager.report_fields
         gated = recorded_codes or learn
         self.report: ReportSink = self._report_gated if gated else report_fields
         self._report_fields = report_fields
@@ -152,7 +157,7 @@ class Gate:
                 request.event_type, request.severity, request.description, request.source_id,
             )  # fmt: skip
         else:
-            self.timeline.apply(request)
+            self._apply(request)
 
     def _report_gated(
         self,

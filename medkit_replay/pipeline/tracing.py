@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.engine.correlation.engine import CorrelationResult
     from medkit_replay.engine.correlation.rules import CorrelationRule
-    from medkit_replay.engine.manager import FaultManager, Row
+    from medkit_replay.engine.manager import Row
     from medkit_replay.engine.timeline import Timeline
     from medkit_replay.inputs import Recording
     from medkit_replay.inputs.selection import Role
@@ -67,10 +67,11 @@ class Tracer:
     """Fills ``trace`` from one replay: attach it to the manager before the gate is built,
     then to the gate, and let the loop read messages and send requests through it."""
 
-    def __init__(self, trace: FaultTrace, manager: FaultManager, router: Router) -> None:
+    def __init__(self, trace: FaultTrace, timeline: Timeline, router: Router) -> None:
         self.trace = trace
         self.code = trace.fault_code
-        self.manager = manager
+        self.timeline = timeline
+        manager = self.manager = timeline.manager
         self.router = router
         self._current: MessageTuple | None = None
         self._seen: dict[str, int] = {}  # requests for the code per source in this message
@@ -93,10 +94,10 @@ class Tracer:
     # -- the loop's side -------------------------------------------------------------------
 
     def messages(
-        self, tuples: Iterator[MessageTuple], recording: Recording, timeline: Timeline
+        self, tuples: Iterator[MessageTuple], recording: Recording
     ) -> Iterator[MessageTuple]:
         """The recording's messages, noting each; takes the ``--at`` state on the way."""
-        trace = self.trace
+        trace, timeline = self.trace, self.timeline
         last_ns: int | None = None
         for item in tuples:
             last_ns = item[0]

@@ -1,0 +1,211 @@
+"""``medkit-replay sweep INPUT... --vary NODE.PARAM=V1,V2``: what-if runs over a grid of settings.
+
+Thin: checks the grid (:mod:`medkit_replay.tuning.grid`), runs it
+(:mod:`medkit_replay.tuning.sweep`), prints the ranking and writes the page.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from contextlib import nullcontext
+from pathlib import Path
+
+import click
+
+from medkit_replay.commands import config_option
+from medkit_replay.commands.fleet import timeout_seconds
+from medkit_replay.commands.streams import standard_output
+from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.outputs.console import warn
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@config_option("ROS 2 parameter file under every variant (repeatable; later files override).")
+@click.option(
+    "--vary",
+    "varies",
+    multiple=True,
+    required=True,
+    metavar="NODE.PARAM=V1,V2,...",
+    help="A parameter and its values (repeatable: the grid is every combination).",
+)
+@click.option(
+    "--budget",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Fault budget YAML checked on every variant x input (the budget columns).",
+)
+@click.option(
+    "--jobs",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: one per CPU; 1 runs in this process).",
+)
+@click.option(
+    "--dask",
+    "dask_address",
+    type=str,
+    default=None,
+    help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
+)
+@click.option(
+    "--timeout",
+    type=float,
+    default=None,
+    callback=timeout_seconds,
+    metavar="SECONDS",
+    help="Kill a job (one input, a share of the grid) that takes longer; its rows say so.",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=None,
+    help="Folder for the tables (runs, run_codes, variants, codes; CSV and Parquet) and a "
+    "parameter file per variant (variants/v01.yaml...).",
+)
+@click.option(
+    "--html",
+    "html_path",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
+)
+@click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
+def sweep(
+    inputs: tuple[Path, ...],
+    configs: tuple[Path, ...],
+    varies: tuple[str, ...],
+    budget: Path | None,
+    jobs: int | None,
+    dask_address: str | None,
+    timeout: float | None,
+    out_dir: Path | None,
+    html_path: Path | None,
+    quiet: bool,
+) -> None:
+    """Replay INPUT... once per variant of a grid of settings and rank the variants.
+
+    The grid is every combination of the --vary values, each over the layered --config files;
+    any parameter of any node may vary, file-valued ones too (paths relative to the current
+    folder). Each input is read once per worker and bridge setting, its requests fed to every
+    variant. Exit status: 1 when --budget is given and a variant failed it on some input.
+
+    \b
+    Examples:
+      medkit-replay sweep missions/ --config robot.yaml \\
+          --vary fault_manager.confirmation_threshold=-1,-3,-5 \\
+          --vary fault_manager.healing_threshold=1,3 --out sweep-out --html sweep.html
+      medkit-replay sweep run.mcap \\
+          --vary fault_manager.correlation.config_file=rules_a.yaml,rules_b.yaml
+    """
+    from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.fleet.cluster import dask_client_type  # noqa: PLC0415
+    from medkit_replay.fleet.discover import discover  # noqa: PLC0415
+    from medkit_replay.fleet.progress import fleet_progress  # noqa: PLC0415
+    from medkit_replay.fleet.workers import default_jobs  # noqa: PLC0415
+    from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
+    from medkit_replay.tuning.grid import parse_vary  # noqa: PLC0415
+    from medkit_replay.tuning.sweep import (  # noqa: PLC0415
+        TABLES,
+        VARIANTS_FOLDER,
+        checked_grid,
+        plan_jobs,
+        run_sweep,
+    )
+    from medkit_replay.tuning.terminal import print_summary, summary_renderables  # noqa: PLC0415
+
+    if dask_address is not None and jobs is not None:
+        raise click.UsageError("--jobs and --dask cannot be used together")
+    if dask_address is not None:
+        dask_client_type()  # a missing extra is said before anything runs
+    config_paths = config_files(configs)
+    grid = checked_grid(configs, [parse_vary(spec) for spec in varies])
+    parsed_budget = None
+    if budget is not None:
+        from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
+
+        parsed_budget = load_budget(budget)
+    varied_files = [
+        Path(str(s.value))
+        for v in grid.variants
+        for s in v.settings
+        if s.name.endswith("config_file") and s.value
+    ]
+    protected = [*inputs, *config_paths, *varied_files, *([budget] if budget else [])]
+    outputs = [("--html", html_path)] if html_path is not None else []
+    if out_dir is not None:
+        outputs += [("--out", out_dir), ("--out", out_dir / VARIANTS_FOLDER)]
+        outputs += [("--out", out_dir / f"{t}.{s}") for t in TABLES for s in ("csv", "parquet")]
+    refuse_overlap(protected, outputs)
+    recordings = discover(inputs)
+    if not recordings:
+        raise InputError(
+            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
+            path=", ".join(str(d) for d in inputs),
+        )
+    parquet = False
+    if out_dir is not None:
+        parquet = _has_pyarrow()
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot create the tables folder: {err.strerror}", path=str(out_dir)
+            ) from None
+    for warning in grid.warnings:
+        warn(warning)
+    workers = 1 if dask_address is None and jobs == 1 else (jobs or default_jobs())
+    plan = plan_jobs(recordings, configs, grid.variants, parsed_budget, workers)
+    bar = fleet_progress(sys.stderr, len(plan), quiet=quiet)
+    try:
+        with bar if bar is not None else nullcontext():
+            outcome = run_sweep(
+                plan,
+                grid,
+                out_dir,
+                jobs=workers,
+                dask_address=dask_address,
+                timeout=timeout,
+                parquet=parquet,
+                on_done=bar,
+            )
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot write the sweep tables: {err.strerror}", path=str(out_dir)
+        ) from None
+    if html_path is not None:
+        from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
+
+        try:
+            write_page(html_path, grid, outcome, len(recordings))
+        except OSError as err:
+            raise MedkitReplayError(
+                f"cannot write the page: {err.strerror}", path=str(html_path)
+            ) from None
+    if not quiet:
+        with standard_output("the sweep summary"):
+            parts = summary_renderables(
+                outcome.variants,
+                len(recordings),
+                outcome.failed,
+                out_dir,
+                budget=parsed_budget is not None,
+            )
+            print_summary(sys.stdout, parts)
+    over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
+    if parsed_budget is not None and over:
+        click.get_current_context().exit(1)
+
+
+def _has_pyarrow() -> bool:
+    """Whether pyarrow can be imported (not importing it yet); without it the tables are CSV
+    only, said once."""
+    if importlib.util.find_spec("pyarrow") is not None:
+        return True
+    from medkit_replay.outputs.parquet import EXTRA_HINT  # noqa: PLC0415  # pandas: only here
+
+    warn(f"pyarrow is not installed: tables written as CSV only ({EXTRA_HINT})")
+    return False

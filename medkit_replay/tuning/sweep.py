@@ -1,0 +1,240 @@
+"""A whole sweep: the grid checked, jobs planned and run (processes or Dask), rows streamed to
+the tables in a fixed order, totals and ranking at the end.
+
+Rows are written as jobs finish, in job order (a job that finishes early waits in a small
+buffer), so memory stays flat however many rows the sweep makes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from operator import attrgetter
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from medkit_replay.config.params import load_parameters
+from medkit_replay.fleet.cluster import run_jobs_on_dask
+from medkit_replay.fleet.workers import run_jobs
+from medkit_replay.outputs.atomic import write_text_atomic
+from medkit_replay.tuning.grid import check_names, make_grid, variant_config, variant_yaml
+from medkit_replay.tuning.metrics import CODE_COLUMNS, RUN_COLUMNS, CodeRow, RunRow
+from medkit_replay.tuning.ranking import (
+    CODE_TOTAL_COLUMNS,
+    VARIANT_COLUMNS,
+    CodeTotal,
+    Totals,
+    VariantTotal,
+)
+from medkit_replay.tuning.run import SweepJob, SweepPart, failed_part, sweep_job
+from medkit_replay.tuning.tables import TableWriter, column_kinds
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from medkit_replay.checks import Budget
+    from medkit_replay.tuning.grid import Variant, Vary
+
+TABLES = ("runs", "run_codes", "variants", "codes")
+"""The tables of ``--out DIR``, each as .csv and .parquet."""
+VARIANTS_FOLDER = "variants"
+"""Under ``--out``: one parameter file per variant, to give ``analyze`` after the base configs."""
+
+
+@dataclass(frozen=True, slots=True)
+class Grid:
+    """The checked grid of a sweep and what reading its configs said."""
+
+    varies: tuple[Vary, ...]
+    variants: tuple[Variant, ...]
+    warnings: tuple[str, ...]
+
+
+def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
+    """Build the grid and read every variant's config as its replays will.
+
+    Raises:
+        ConfigError: a bad name or value (naming its ``--vary``), or a bad base config.
+    """
+    base = load_parameters(configs)
+    variants = make_grid(varies)
+    check_names(base, varies, variants)
+    warnings: list[str] = []
+    for variant in variants:
+        for warning in variant_config(base, variant).warnings:
+            warnings.append(f"{variant.id}: {warning}")
+    return Grid(tuple(varies), tuple(variants), tuple(dict.fromkeys(warnings)))
+
+
+def plan_jobs(
+    inputs: Sequence[Path],
+    configs: Sequence[Path],
+    variants: Sequence[Variant],
+    budget: Budget | None,
+    workers: int,
+) -> list[SweepJob]:
+    """Jobs in input order, each input's variants split in as many shares as keep ``workers``
+    busy (each share reads the input once per bridge setting)."""
+    shares = max(1, min(len(variants), math.ceil(workers / max(len(inputs), 1))))
+    size = math.ceil(len(variants) / shares)
+    absolute = tuple(str(Path(c).absolute()) for c in configs)
+    return [
+        SweepJob(str(path.absolute()), str(path), absolute, tuple(variants[at : at + size]), budget)
+        for path in inputs
+        for at in range(0, len(variants), size)
+    ]
+
+
+class _Ordered:
+    """Takes parts as jobs finish and hands them on in job order."""
+
+    def __init__(self, take: Callable[[SweepPart], None]) -> None:
+        self.take = take
+        self.waiting: dict[int, SweepPart] = {}
+        self.next = 0
+
+    def __call__(self, index: int, part: SweepPart) -> None:
+        self.waiting[index] = part
+        while self.next in self.waiting:
+            self.take(self.waiting.pop(self.next))
+            self.next += 1
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """What a sweep leaves for the summary and the page."""
+
+    variants: tuple[VariantTotal, ...]
+    codes: tuple[CodeTotal, ...]
+    failed: tuple[RunRow, ...]
+
+
+def _columns(grid: Grid, names: Sequence[str]) -> list[str]:
+    """The variant's id, then one column per varied parameter, then the row's own fields."""
+    return [names[0], *(v.key for v in grid.varies), *names[1:]]
+
+
+def run_sweep(
+    plan: Sequence[SweepJob],
+    grid: Grid,
+    out_dir: Path | None,
+    *,
+    jobs: int = 1,
+    dask_address: str | None = None,
+    timeout: float | None = None,
+    parquet: bool = False,
+    on_done: Callable[[int, SweepPart], None] | None = None,
+) -> Outcome:
+    """Run the planned jobs (``plan_jobs``) and write the tables to ``out_dir`` (if given).
+
+    ``jobs`` worker processes (1: this process), or ``dask_address``'s cluster, run them;
+    ``on_done`` is told of each job as it ends.
+
+    Raises:
+        MedkitReplayError: the Dask scheduler cannot be reached; OSError: a table cannot be
+            written.
+    """
+    settings = {
+        v.id: [vary.cell(s) for vary, s in zip(grid.varies, v.settings, strict=True)]
+        for v in grid.variants
+    }
+    totals = Totals(grid.variants)
+    failed: list[RunRow] = []
+    writers: list[TableWriter] = []
+
+    def open_writers() -> None:
+        # Opened with the first rows (pyarrow, when the tables have Parquet, loads then).
+        if out_dir is not None and not writers:
+            for name, columns, record in (
+                ("runs", RUN_COLUMNS, RunRow),
+                ("run_codes", CODE_COLUMNS, CodeRow),
+            ):
+                writers.append(
+                    TableWriter(
+                        out_dir, name, _columns(grid, columns), _kinds(grid, record), parquet
+                    )
+                )
+
+    run_values = attrgetter(*RUN_COLUMNS)
+    code_values = attrgetter(*CODE_COLUMNS)
+
+    def take(part: SweepPart) -> None:
+        open_writers()
+        for row in part.runs:
+            totals.add_run(row)
+            if row.error:
+                failed.append(row)
+            if writers:
+                values = run_values(row)
+                writers[0].write((values[0], *settings[row.variant], *values[1:]))
+        for code in part.codes:
+            totals.add_code(code)
+            if writers:
+                values = code_values(code)
+                writers[1].write((values[0], *settings[code.variant], *values[1:]))
+
+    ordered = _Ordered(take)
+
+    def done(index: int, part: SweepPart) -> None:
+        ordered(index, part)
+        if on_done is not None:
+            on_done(index, part)
+
+    try:
+        if dask_address is not None:
+            run_jobs_on_dask(
+                dask_address, plan, sweep_job, _failed_job, timeout=timeout, on_done=done
+            )
+        else:
+            run_jobs(plan, sweep_job, _failed_job, jobs=jobs, timeout=timeout, on_done=done)
+        open_writers()
+        variant_totals = totals.variant_totals()
+        code_totals = tuple(totals.code_totals())
+        if out_dir is not None:
+            _write_totals(out_dir, grid, variant_totals, code_totals, settings, parquet)
+    except BaseException as err:
+        for writer in writers:
+            writer.__exit__(type(err), err, err.__traceback__)
+        raise
+    for writer in writers:
+        writer.__exit__(None, None, None)
+    return Outcome(tuple(variant_totals), code_totals, tuple(failed))
+
+
+def _kinds(grid: Grid, record: type[Any]) -> dict[str, str]:
+    return {**column_kinds(record), **{v.key: v.kind for v in grid.varies}}
+
+
+def _failed_job(job: SweepJob, problem: str) -> SweepPart:
+    return failed_part(job, problem)
+
+
+def _write_totals(
+    out_dir: Path,
+    grid: Grid,
+    variants: Sequence[VariantTotal],
+    codes: Sequence[CodeTotal],
+    settings: dict[str, list[object]],
+    parquet: bool,
+) -> None:
+    """The variants table (ranked, best first) and the codes table; a parameter file per
+    variant under ``variants/``."""
+    variant_columns = ["rank", "variant", *(v.key for v in grid.varies), *VARIANT_COLUMNS[2:]]
+    with TableWriter(
+        out_dir, "variants", variant_columns, _kinds(grid, VariantTotal), parquet
+    ) as writer:
+        variant_values = attrgetter(*VARIANT_COLUMNS)
+        for total in variants:
+            values = variant_values(total)
+            writer.write((values[0], values[1], *settings[total.variant], *values[2:]))
+    with TableWriter(
+        out_dir, "codes", _columns(grid, CODE_TOTAL_COLUMNS), _kinds(grid, CodeTotal), parquet
+    ) as writer:
+        code_values = attrgetter(*CODE_TOTAL_COLUMNS)
+        for code in codes:
+            values = code_values(code)
+            writer.write((values[0], *settings[code.variant], *values[1:]))
+    folder = out_dir / VARIANTS_FOLDER
+    folder.mkdir(exist_ok=True)
+    for variant in grid.variants:
+        write_text_atomic(folder / f"{variant.id}.yaml", variant_yaml(variant, folder))

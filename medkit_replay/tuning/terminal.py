@@ -1,0 +1,108 @@
+"""A sweep on the terminal: the variants ranked, best first, and the inputs that failed.
+
+Labels and paths are shown literally (no rich markup, control characters escaped); away from a
+terminal the summary is plain text at 80 columns.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, TextIO
+
+from rich import box
+from rich.console import Group
+from rich.table import Table
+from rich.text import Text
+
+from medkit_replay.outputs.console import literal_console, plain_text
+from medkit_replay.text import printable
+from medkit_replay.tuning.ranking import RANKING
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from pathlib import Path
+
+    from rich.console import RenderableType
+
+    from medkit_replay.tuning.metrics import RunRow
+    from medkit_replay.tuning.ranking import VariantTotal
+
+MAX_VARIANT_ROWS = 30
+"""Variants listed on the terminal; variants.csv has all of them."""
+MAX_ERROR_ROWS = 10
+
+
+def _seconds(ns: int | None) -> str:
+    return "" if ns is None else f"{ns / 1e9:,.2f}"
+
+
+def summary_renderables(
+    totals: Sequence[VariantTotal],
+    inputs: int,
+    failed: Sequence[RunRow],
+    out_dir: Path | None,
+    *,
+    budget: bool,
+) -> list[RenderableType]:
+    """What the terminal summary shows, as rich renderables."""
+    head = Text()
+    head.append("sweep: ", style="bold")
+    head.append(f"{len(totals):,} variant(s) x {inputs:,} input(s)")
+    parts: list[RenderableType] = [head]
+    table = Table(
+        box=box.SIMPLE,
+        title="variants, best first",
+        title_justify="left",
+        pad_edge=False,
+    )
+    table.add_column("#", justify="right", no_wrap=True)
+    table.add_column("variant", overflow="fold", min_width=20, ratio=1)
+    names = ["conf", "flaps", "events", "muted", "near", "lat s"]
+    if budget:
+        names.append("over")
+    for name in names:
+        table.add_column(name, justify="right", no_wrap=True)
+    for total in totals[:MAX_VARIANT_ROWS]:
+        cells: list[Text | str] = [
+            str(total.rank),
+            Text(printable(f"{total.variant} {total.label}".strip()).replace(" ", "\n")),
+            f"{total.faults_confirmed:,}",
+            f"{total.flaps:,}",
+            f"{total.events:,}",
+            f"{total.muted_events:,}",
+            f"{total.near_misses:,}",
+            _seconds(total.latency_mean_ns),
+        ]
+        if budget:
+            over = total.budget_failed
+            cells.append(Text(f"{over:,}", style="bold red" if over else ""))
+        table.add_row(*cells)
+    parts.append(table)
+    legend = (
+        "conf: faults confirmed (summed over inputs); flaps: confirm-heal cycles; events: "
+        "FaultEvents published; muted: events muted by correlation; near: near misses; lat s: "
+        "mean detection latency"
+        + ("; over: inputs over budget" if budget else "")
+        + f". Ranked by {RANKING}."
+    )
+    parts.append(Text(legend, style="dim"))
+    if len(totals) > MAX_VARIANT_ROWS:
+        more = len(totals) - MAX_VARIANT_ROWS
+        parts.append(Text(f"... {more:,} more variants in variants.csv", style="dim"))
+    if failed:
+        parts.append(Text("not replayed:", style="bold red"))
+        for row in failed[:MAX_ERROR_ROWS]:
+            parts.append(Text("  " + printable(f"{row.variant}: {row.error}")))
+        if len(failed) > MAX_ERROR_ROWS:
+            parts.append(Text(f"  ... {len(failed) - MAX_ERROR_ROWS:,} more in runs.csv"))
+    if out_dir is not None:
+        parts.append(Text(f"tables: {printable(str(out_dir))}/"))
+    return parts
+
+
+def print_summary(stream: TextIO, parts: list[RenderableType]) -> None:
+    """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
+    console = literal_console(stream)
+    if console.is_terminal:
+        console.print(Group(*parts))
+        return
+    stream.write(plain_text(Group(*parts), 80))

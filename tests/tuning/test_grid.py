@@ -1,0 +1,126 @@
+"""The sweep's grid: --vary specs typed as ROS parameters, their product, the variants' files."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import pytest
+
+from medkit_replay.config.params import load_parameters
+from medkit_replay.errors import ConfigError
+from medkit_replay.tuning.grid import (
+    check_names,
+    make_grid,
+    parse_vary,
+    split_values,
+    variant_config,
+    variant_yaml,
+)
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+
+def test_values_split_on_commas_outside_brackets_and_quotes() -> None:
+    assert split_values("-1,-3, -5") == ["-1", "-3", "-5"]
+    assert split_values("[a, b],'x,y',\"p,q\",") == ["[a, b]", "'x,y'", '"p,q"', ""]
+
+
+def test_values_are_typed_as_in_a_parameter_file() -> None:
+    vary = parse_vary("log_bridge.exclude_nodes=[a, b],[c]")
+    assert vary.values == (["a", "b"], ["c"])
+    assert parse_vary("fault_manager.confirmation_threshold=-1,-3").values == (-1, -3)
+    assert parse_vary("fault_manager.auto_confirm_after_sec=0.0,5").values == (0.0, 5)
+    assert parse_vary("medkit_replay.enable_log_bridge=true,'true'").values == (True, "true")
+    assert parse_vary("fault_manager.confirmation_threshold=-1,-3").kind == "int"
+    assert parse_vary("medkit_replay.enable_log_bridge=true,'true'").kind == "str"
+
+
+def test_file_values_are_absolute_and_empty_is_off(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    vary = parse_vary("fault_manager.correlation.config_file=,rules/a.yaml")
+    assert vary.values == ("", str(tmp_path / "rules" / "a.yaml"))
+    assert vary.texts == ("", "rules/a.yaml")
+
+
+def test_the_grid_is_the_product_first_vary_slowest() -> None:
+    grid = make_grid(
+        [
+            parse_vary("fault_manager.confirmation_threshold=-1,-3"),
+            parse_vary("fault_manager.healing_threshold=1,2,3"),
+        ]
+    )
+    assert [v.id for v in grid] == [f"v{i:02d}" for i in range(1, 7)]
+    assert [v.label for v in grid[:4]] == [
+        "confirmation_threshold=-1 healing_threshold=1",
+        "confirmation_threshold=-1 healing_threshold=2",
+        "confirmation_threshold=-1 healing_threshold=3",
+        "confirmation_threshold=-3 healing_threshold=1",
+    ]
+
+
+def test_a_variant_config_is_what_a_last_parameter_file_would_give(tmp_path: Path) -> None:
+    base_file = tmp_path / "base.yaml"
+    base_file.write_text("fault_manager:\n  ros__parameters:\n    healing_enabled: true\n")
+    base = load_parameters([base_file])
+    (variant,) = make_grid([parse_vary("fault_manager.healing_threshold=5")])
+    config = variant_config(base, variant)
+    assert config.manager.debounce.healing_threshold == 5
+    assert config.manager.debounce.healing_enabled is True
+    with_positive = make_grid([parse_vary("fault_manager.confirmation_threshold=3")])[0]
+    warned = variant_config(base, with_positive)
+    assert warned.manager.debounce.confirmation_threshold == -3
+    assert any("is positive" in w for w in warned.warnings)
+
+
+def test_an_unread_name_is_refused(tmp_path: Path) -> None:
+    base = load_parameters([])
+    varies = [parse_vary("fault_manager.healing_treshold=1")]
+    with pytest.raises(
+        ConfigError,
+        match=r"--vary fault_manager.healing_treshold: fault_manager reads no parameter",
+    ):
+        check_names(base, varies, make_grid(varies))
+    # Read only with a correlation file: refused without one.
+    varies = [parse_vary("fault_manager.correlation.cleanup_interval_sec=1.0")]
+    with pytest.raises(ConfigError, match="unused with this config"):
+        check_names(base, varies, make_grid(varies))
+
+
+def test_the_variant_file_reproduces_the_variant(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    rules = tmp_path / "rules.yaml"
+    rules.write_text("correlation:\n  enabled: false\n")
+    (variant,) = make_grid(
+        [
+            parse_vary("fault_manager.correlation.config_file=rules.yaml"),
+            parse_vary("log_bridge.severity_floor=40"),
+        ]
+    )
+    folder = tmp_path / "out" / "variants"
+    folder.mkdir(parents=True)
+    path = folder / "v01.yaml"
+    path.write_text(variant_yaml(variant, folder))
+    assert '    "correlation.config_file": "../../rules.yaml"' in path.read_text()
+    params = load_parameters([path])
+    assert params.node("log_bridge")["severity_floor"].value == 40
+    named = params.node("fault_manager")["correlation.config_file"]
+    assert (named.path.parent / str(named.value)).resolve() == rules
+
+
+@pytest.mark.parametrize(
+    "text", ["-3", "5.0", "1e-05", ".inf", "true", "'true'", "abc", "[a, b]", "[1, 2]", "- x"]
+)
+def test_a_variant_file_types_its_values_back_the_same(tmp_path: Path, text: str) -> None:
+    from medkit_replay.tuning.grid import Setting, Variant  # noqa: PLC0415
+
+    vary = parse_vary(f"log_bridge.some_value={text}")
+    (value,) = vary.values
+    variant = Variant(0, (Setting("log_bridge", "some_value", value, text),))
+    path = tmp_path / "v01.yaml"
+    path.write_text(variant_yaml(variant, tmp_path))
+    assert load_parameters([path]).node("log_bridge")["some_value"].value == value
