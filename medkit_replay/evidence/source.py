@@ -173,8 +173,8 @@ class _Db3File(_File):
 
 def storage_files(path: Path) -> list[Path]:
     """The storage files of one input (a rosbag2 folder or a bare file); a compressed one
-    (``.zstd``) is listed too, and refused when opened."""
-    wanted = (".mcap", ".db3", ".zstd")
+    (``.zstd``) and a ROS 1 bag are listed too, and refused when opened."""
+    wanted = (".mcap", ".db3", ".zstd", ".bag")
     if path.is_dir():
         found = [p for p in path.iterdir() if p.suffix.lower() in wanted and p.is_file()]
         return sorted(found, key=lambda p: p.name)
@@ -198,6 +198,10 @@ class EvidenceSource:
                 try:
                     if file.suffix.lower() == ".zstd":
                         raise ValueError("file-compressed storage")
+                    if file.suffix.lower() == ".bag":
+                        # Its payloads are ROS 1 serialized: no rosbag2 clip or serializer
+                        # rendering the live (ROS 2) manager would make can be taken from it.
+                        raise ValueError("a ROS 1 bag holds no ROS 2 messages to capture")
                     opened: _File = (
                         _McapFile(file) if file.suffix.lower() == ".mcap" else _Db3File(file)
                     )
