@@ -74,6 +74,8 @@ class Result:
     warnings: tuple[str, ...] = ()
     summary: Summary
     config: dict[str, object] = field(default_factory=dict)
+    fetched: dict[str, tuple[int, int]] = field(default_factory=dict)
+    """Remote inputs by name: (bytes fetched, bytes of their files); not in the JSON report."""
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

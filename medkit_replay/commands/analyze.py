@@ -11,7 +11,7 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.errors import MedkitReplayError
@@ -24,7 +24,7 @@ from medkit_replay.pipeline import replay
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @config_option()
 @click.option(
     "--json",
@@ -63,7 +63,7 @@ from medkit_replay.pipeline import replay
 )
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     json_out: str | None,
     csv_dir: Path | None,
@@ -80,13 +80,14 @@ def analyze(
       medkit-replay analyze run.jsonl --json - --quiet
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
+      medkit-replay analyze s3://fleet-bags/robot7/mission_0412/ --config robot_params.yaml
     """
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
     chosen = [
         (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
-    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
+    refuse_overlap([*local_paths(inputs), *config_files(configs)], _output_paths(json_out, chosen))
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
         result = replay(list(inputs), list(configs), progress=bar)

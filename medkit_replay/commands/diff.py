@@ -18,7 +18,7 @@ import click
 from rich.console import Console
 from rich.text import Text
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.config.referenced import config_files
 from medkit_replay.diffing import diff_renderable, diff_reports, read_report, tolerance_ns
@@ -34,18 +34,19 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 
-def is_report_path(path: Path) -> bool:
-    """A ``.json`` file is read as a report; anything else is a recording or script to replay."""
-    return path.suffix.lower() == ".json"
+def is_report_path(path: Path | str) -> bool:
+    """A local ``.json`` file is read as a report; anything else is a recording or script to
+    replay (a URL is a recording)."""
+    return isinstance(path, Path) and path.suffix.lower() == ".json"
 
 
 class _Side:
     """One side of the diff: a report read from a file, or a recording replayed now."""
 
-    def __init__(self, path: Path, configs: tuple[Path, ...], *, quiet: bool) -> None:
+    def __init__(self, path: Path | str, configs: tuple[Path, ...], *, quiet: bool) -> None:
         self.path = path
         self.result: Result | None = None
-        if is_report_path(path):
+        if isinstance(path, Path) and is_report_path(path):
             self.report = read_report(path)
             return
         bar = progress_bar(sys.stderr, quiet=quiet)
@@ -95,7 +96,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
 
 @click.command()
 @click.argument("baseline", type=click.Path(path_type=Path))
-@click.argument("current", type=click.Path(path_type=Path))
+@input_argument("current", many=False)
 @config_option("ROS 2 parameter file for a side that is replayed (repeatable).")
 @click.option(
     "--time-tolerance",
@@ -123,7 +124,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
 def diff(
     ctx: click.Context,
     baseline: Path,
-    current: Path,
+    current: Path | str,
     configs: tuple[Path, ...],
     time_tolerance: float,
     json_out: str | None,
@@ -144,7 +145,8 @@ def diff(
     tolerance = tolerance_ns(time_tolerance)
     if json_out is not None and json_out != "-":
         refuse_overlap(
-            [baseline, current, *config_files(configs, check=False)], [("--json", Path(json_out))]
+            [*local_paths([baseline, current]), *config_files(configs, check=False)],
+            [("--json", Path(json_out))],
         )
     if update and not is_report_path(baseline):
         raise MedkitReplayError(

@@ -16,6 +16,7 @@ can be read raises :class:`~medkit_replay.errors.InputError`.
 """
 
 from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
+from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.selection import Role, Selection
 from medkit_replay.inputs.source import Input, InputContext, Message, Opener
 from medkit_replay.msgdefs import normalize_typename
@@ -30,6 +31,7 @@ __all__ = [
     "Role",
     "Selection",
     "input_kind",
+    "is_remote",
     "normalize_typename",
     "open_recording",
 ]

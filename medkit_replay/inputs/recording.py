@@ -1,6 +1,7 @@
 """A recording: several inputs opened together and merged into one time-ordered message stream.
 
-Chooses a reader per input through READERS; the only place inputs are opened and closed.
+Chooses a reader per input through READERS (a URL: inputs.remote); the only place inputs are
+opened and closed.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import merge
+from medkit_replay.inputs.remote import open_remote
+from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
@@ -20,6 +23,7 @@ if TYPE_CHECKING:
     from types import TracebackType
     from typing import Self
 
+    from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
@@ -107,6 +111,14 @@ class Recording:
         return min(starts), max(ends)
 
     @property
+    def fetched(self) -> dict[str, tuple[int, int]]:
+        """Remote inputs by name: (bytes fetched, bytes of their files) so far."""
+        tallies: list[Tally] = [
+            fetched() for i in self._inputs if (fetched := getattr(i, "fetched", None))
+        ]
+        return {tally.display: (tally.fetched, tally.size) for tally in tallies}
+
+    @property
     def inputs(self) -> tuple[InputSummary, ...]:
         """One summary per input, in input order; final once :meth:`messages` is exhausted."""
         return tuple(i.summary() for i in self._inputs)
@@ -137,17 +149,21 @@ def open_recording(
     extra_topics: Iterable[str] = (),
     only_roles: Iterable[Role] | None = None,
     use_index: bool = True,
+    tallies: dict[str, Tally] | None = None,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
     Args:
-        paths: rosbag2 directories, ``.mcap`` or ``.db3`` files (any kind READERS knows).
+        paths: rosbag2 directories, ``.mcap`` or ``.db3`` files (any kind READERS knows), or
+            ``s3://``, ``gs://``, ``http(s)://`` URLs of a bag folder or storage file.
         rosout: also read ``/rosout`` (for the log bridge).
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).
         only_roles: read only topics of these roles (None: every role).
         use_index: read uncompressed MCAP chunks through their message indexes (False:
             every chunk is read whole; the messages are the same).
+        tallies: bytes fetched for remote inputs are counted here, by URL (give the same
+            dict to several passes over the same inputs to count them all).
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -171,6 +187,10 @@ def open_recording(
     inputs: list[Input] = []
     try:
         for index, raw_path in enumerate(paths):
+            if is_remote(raw_path):
+                context = InputContext(index, selection, sink, use_index=use_index)
+                inputs.append(open_remote(str(raw_path), context, tallies))
+                continue
             path = Path(raw_path)
             if not path.exists():
                 raise InputError("input not found", path=str(path))

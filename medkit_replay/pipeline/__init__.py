@@ -5,6 +5,7 @@ The only place the layers meet (besides the commands, which call this).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,7 +16,7 @@ from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
-from medkit_replay.inputs import open_recording
+from medkit_replay.inputs import is_remote, open_recording
 from medkit_replay.inputs.selection import LOG_TYPE
 from medkit_replay.model import (
     CLEAR_ROWS,
@@ -40,6 +41,7 @@ from medkit_replay.spool import Spool
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
+    from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.result import Result
 
 __all__ = ["PROGRESS_EVERY", "Phase", "Progress", "replay"]
@@ -72,7 +74,7 @@ def replay(
     """
     if not inputs:
         raise InputError("no input given")
-    paths = [Path(p) for p in inputs]
+    paths = [p if is_remote(p) else Path(p) for p in inputs]
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
     options, option_warnings = replay_options(params)
@@ -88,7 +90,8 @@ def replay(
     manager.set_row_sinks(reports.row_sink(), events.row_sink(), transitions.row_sink())
     timeline = Timeline(manager)
     router = Router(options)
-    recorded_codes = recorded_report_codes(paths, progress, progress_every)
+    tallies: dict[str, Tally] = {}  # bytes fetched from remote inputs, both passes
+    recorded_codes = recorded_report_codes(paths, progress, progress_every, tallies)
     gate = Gate(timeline, recorded_codes)
     rosout = router.log is not None
     rosout_topic = router.log.topic if router.log is not None else "/rosout"
@@ -97,6 +100,7 @@ def replay(
         rosout=rosout,
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
+        tallies=tallies,
     ) as recording:
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None
@@ -153,7 +157,7 @@ def replay(
         parity = parity if parity is not None else {}
         parity["service_responses"] = compare_responses(router.services.responses, reports, clears)
     config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
-    return assemble_result(
+    result = assemble_result(
         manager,
         timeline,
         output,
@@ -164,3 +168,7 @@ def replay(
         (events, transitions, reports, clears),
         config,
     )
+    if tallies:
+        fetched = {name: (t.fetched, t.size) for name, t in tallies.items()}
+        result = dataclasses.replace(result, fetched=fetched)
+    return result
