@@ -10,15 +10,16 @@ from __future__ import annotations
 import os
 import re
 import threading
+import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
 from urllib.parse import unquote, urlsplit
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from pathlib import Path
 
 _RANGE = re.compile(r"bytes=(\d+)-(\d*)$")
 
@@ -31,7 +32,8 @@ class Served:
     body_bytes: int = 0
     forbidden: set[str] = field(default_factory=set)
     drop_next: int = 0  # this many next GETs send half their body and close the connection
-    headers_seen: list[dict[str, str]] = field(default_factory=list)
+    delay_s: float = 0.0  # wait before each GET's body (a slow link)
+    seen: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # method, headers
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
@@ -41,7 +43,7 @@ class _Handler(BaseHTTPRequestHandler):
     root: ClassVar[Path]
     served: ClassVar[Served]
 
-    def log_message(self, format: str, *args: object) -> None:  # noqa: A002
+    def log_message(self, format: str, *args: object) -> None:
         """Silent: the tests read what they need from ``served``."""
 
     def _target(self) -> Path | None:
@@ -68,7 +70,7 @@ class _Handler(BaseHTTPRequestHandler):
     def _serve(self, *, body: bool) -> None:
         with self.served.lock:
             self.served.requests += 1
-            self.served.headers_seen.append(dict(self.headers.items()))
+            self.served.seen.append((self.command, dict(self.headers.items())))
         relative = unquote(urlsplit(self.path).path).lstrip("/")
         if relative in self.served.forbidden:
             self._refuse(403)
@@ -103,6 +105,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.end_headers()
         if not body or not length:
             return
+        if self.served.delay_s:
+            time.sleep(self.served.delay_s)
         with target.open("rb") as stream:
             data = os.pread(stream.fileno(), length, start)
         with self.served.lock:
