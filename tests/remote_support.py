@@ -11,15 +11,18 @@ import os
 import re
 import threading
 import time
+import uuid
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 from urllib.parse import unquote, urlsplit
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
     from pathlib import Path
+
+    import pytest
 
 _RANGE = re.compile(r"bytes=(\d+)-(\d*)$")
 
@@ -139,3 +142,54 @@ def range_server(root: Path) -> Iterator[tuple[str, Served]]:
         server.shutdown()
         server.server_close()
         thread.join()
+
+
+SECRET = "medkit-test-secret-9f3c2a"  # the secret key the S3 client signs with
+KEY_ID = "medkit-test-key-id-41d7"
+
+
+@contextmanager
+def s3_server() -> Iterator[str]:
+    """moto's S3 server on 127.0.0.1 (real HTTP, real range requests); yields its endpoint."""
+    from moto.server import ThreadedMotoServer  # noqa: PLC0415  # a test dependency
+
+    server = ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
+    server.start()
+    host, port = server.get_host_and_port()
+    try:
+        yield f"http://{host}:{port}"
+    finally:
+        server.stop()
+
+
+def aws_environment(monkeypatch: pytest.MonkeyPatch, endpoint: str, home: Path) -> str:
+    """The environment a user sets for MinIO, nothing else of AWS's; returns a new bucket."""
+    for name in list(os.environ):
+        if name.startswith("AWS_"):
+            monkeypatch.delenv(name)
+    monkeypatch.setenv("AWS_ACCESS_KEY_ID", KEY_ID)
+    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", SECRET)
+    monkeypatch.setenv("AWS_REGION", "us-east-1")
+    monkeypatch.setenv("AWS_ENDPOINT_URL", endpoint)
+    monkeypatch.setenv("AWS_CONFIG_FILE", str(home / "no-aws-config"))
+    monkeypatch.setenv("AWS_SHARED_CREDENTIALS_FILE", str(home / "no-aws-credentials"))
+    bucket = f"bags-{uuid.uuid4().hex[:12]}"
+    s3_client().create_bucket(Bucket=bucket)
+    return bucket
+
+
+def s3_client() -> Any:  # boto3 ships no type information
+    import boto3  # noqa: PLC0415  # a test dependency
+
+    return boto3.client("s3", endpoint_url=os.environ["AWS_ENDPOINT_URL"])
+
+
+def upload(bucket: str, local: Path, key: str) -> None:
+    """A file to ``key``, or a folder's files (not its subfolders) under ``key/``."""
+    client = s3_client()
+    if local.is_dir():
+        for path in sorted(local.iterdir()):
+            if path.is_file():
+                client.upload_file(str(path), bucket, f"{key}/{path.name}")
+    else:
+        client.upload_file(str(local), bucket, key)

@@ -87,12 +87,12 @@ def run_isolated(
         for stream in (child.stdin, child.stdout):
             if stream is not None:
                 stream.close()
-    return RunSummary(path=shown, kind=run_kind(Path(path)), error=f"{shown}: {problem}")
+    return RunSummary(path=shown, kind=run_kind(path), error=f"{shown}: {problem}")
 
 
 def run_on_dask(
     address: str,
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,
@@ -125,7 +125,7 @@ def run_on_dask(
     try:
         absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
         arguments: list[list[object]] = [
-            [str(p.absolute()) for p in paths],
+            [p if isinstance(p, str) else str(p.absolute()) for p in paths],
             [absolute_configs] * len(paths),
             [budget] * len(paths),
             [str(p) for p in paths],

@@ -105,7 +105,7 @@ class _Worker:
         self.index: int | None = None
         self.deadline: float | None = None
 
-    def give(self, index: int, path: Path, timeout: float | None) -> None:
+    def give(self, index: int, path: Path | str, timeout: float | None) -> None:
         self.index = index
         self.deadline = None if timeout is None else time.monotonic() + timeout
         self.connection.send((index, path))
@@ -134,7 +134,7 @@ class _Worker:
 
 
 def run_all(
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,
@@ -174,7 +174,7 @@ def run_all(
 
 
 def _run_in_workers(
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     configs: tuple[Path, ...],
     budget: Budget | None,
     count: int,

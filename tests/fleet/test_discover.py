@@ -13,8 +13,8 @@ from tests.fleet.fleet_support import FIXTURES, SAMPLES, build_fleet, report, wr
 from tests.inputs.builders import diag, write_bag
 
 
-def names(paths: list[Path], root: Path) -> list[str]:
-    return [p.relative_to(root).as_posix() for p in paths]
+def names(paths: list[Path | str], root: Path) -> list[str]:
+    return [Path(p).relative_to(root).as_posix() for p in paths]
 
 
 def test_bag_folder_is_one_recording_and_its_storage_files_are_not_counted(

@@ -15,16 +15,22 @@ import signal
 import subprocess
 import sys
 import time
-import uuid
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import pytest
 
 from medkit_replay import replay
 from medkit_replay.outputs.json_report import dumps
 from tests.inputs.builders import diag, string_msg, truncated, write_bag
-from tests.remote_support import range_server
+from tests.remote_support import (
+    KEY_ID,
+    SECRET,
+    aws_environment,
+    range_server,
+    s3_server,
+    upload,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -32,56 +38,24 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 pytest.importorskip("obstore")
-boto3 = pytest.importorskip("boto3")
-moto_server = pytest.importorskip("moto.server")
+pytest.importorskip("boto3")
+pytest.importorskip("moto.server")
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_bags"
 NAV2 = [str(ROOT / "rules/nav2/fault_manager.yaml"), str(ROOT / "rules/nav2/bridges.yaml")]
-SECRET = "medkit-test-secret-9f3c2a"  # the secret key the S3 client signs with
-KEY_ID = "medkit-test-key-id-41d7"
 
 
 @pytest.fixture(scope="module")
 def s3_endpoint() -> Iterator[str]:
-    server = moto_server.ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
-    server.start()
-    host, port = server.get_host_and_port()
-    try:
-        yield f"http://{host}:{port}"
-    finally:
-        server.stop()
+    with s3_server() as endpoint:
+        yield endpoint
 
 
 @pytest.fixture
 def s3_env(s3_endpoint: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> str:
     """The AWS environment a user would set for MinIO; returns a fresh bucket's name."""
-    for name in list(os.environ):
-        if name.startswith("AWS_"):
-            monkeypatch.delenv(name)
-    monkeypatch.setenv("AWS_ACCESS_KEY_ID", KEY_ID)
-    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", SECRET)
-    monkeypatch.setenv("AWS_REGION", "us-east-1")
-    monkeypatch.setenv("AWS_ENDPOINT_URL", s3_endpoint)
-    monkeypatch.setenv("AWS_CONFIG_FILE", str(tmp_path / "no-aws-config"))
-    monkeypatch.setenv("AWS_SHARED_CREDENTIALS_FILE", str(tmp_path / "no-aws-credentials"))
-    bucket = f"bags-{uuid.uuid4().hex[:12]}"
-    _client().create_bucket(Bucket=bucket)
-    return bucket
-
-
-def _client() -> Any:  # boto3 ships no type information
-    return boto3.client("s3", endpoint_url=os.environ["AWS_ENDPOINT_URL"])
-
-
-def upload(bucket: str, local: Path, key: str) -> None:
-    """A file, or a folder's files under ``key/``."""
-    client = _client()
-    if local.is_dir():
-        for path in sorted(local.iterdir()):
-            client.upload_file(str(path), bucket, f"{key}/{path.name}")
-    else:
-        client.upload_file(str(local), bucket, key)
+    return aws_environment(monkeypatch, s3_endpoint, tmp_path)
 
 
 def report_text(result: Result, name: str, local: Path) -> str:
