@@ -286,3 +286,19 @@ def test_sigterm_during_a_download_leaves_the_temporary_folder_empty(tmp_path: P
     assert process.returncode != 0
     assert "Traceback" not in stderr
     assert list(temp.iterdir()) == []
+
+
+def test_check_and_diff_take_urls(tmp_path: Path) -> None:
+    baseline = tmp_path / "baseline.json"
+    budget = ROOT / "rules/budgets/nav2_mission_pass.yaml"
+    local = SAMPLES / "nav2_mission_mcap"
+    assert cli("analyze", str(local), *_configs(), "--json", str(baseline)).returncode == 0
+    with range_server(SAMPLES) as (base, _served):
+        url = f"{base}/nav2_mission_mcap/"
+        diff = cli("diff", str(baseline), url, *_configs())
+        check = cli("check", url, *_configs(), "--budget", str(budget))
+    assert diff.returncode == 0, diff.stderr
+    assert "reports are equal" in diff.stdout
+    assert f"{url} (replayed now)" in diff.stdout
+    assert check.returncode == 0, check.stderr
+    assert "budget holds" in check.stdout
