@@ -53,6 +53,14 @@ def test_engine_sources_never_read_a_clock() -> None:
             assert needle not in text, f"{path.name} uses {needle}"
 
 
+def test_remote_clients_load_only_for_remote_inputs() -> None:
+    """inputs.ranges, inputs.remote and inputs.remote_store: obstore (the 'remote' extra) and
+    boto3 are imported when a URL is opened, never by the CLI or a local replay."""
+    loaded = loaded_after("medkit_replay.cli")
+    assert {"medkit_replay.inputs.remote", "medkit_replay.inputs.ranges"} <= loaded
+    assert sorted(m for m in loaded if m.startswith(("obstore", "boto3", "botocore"))) == []
+
+
 def test_bridges_do_not_import_outputs_or_inputs() -> None:
     loaded = loaded_after("medkit_replay.bridges")
     bad = sorted(
