@@ -298,6 +298,10 @@ def open_remote(text: str, ctx: InputContext, tallies: dict[str, Tally] | None =
         if single:
             return RemoteBag(folder.mirror, ctx, [folder.mirror], _Metadata(), remote=folder)
         return _open_prefix(folder, ctx)
+    except InputError as exc:  # said of the URL, not of the temporary folder
+        folder.close()
+        where = folder.translate(exc.path) if exc.path is not None else None
+        raise type(exc)(folder.translate(exc.problem), path=where) from None
     except BaseException:
         folder.close()
         raise

@@ -15,14 +15,17 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 
 from medkit_replay import replay
+from medkit_replay.errors import InputError
+from medkit_replay.inputs import open_recording
 from medkit_replay.outputs.json_report import dumps
-from tests.inputs.builders import diag, string_msg, truncated, write_bag
+from tests.inputs.builders import diag, flipped, string_msg, truncated, write_bag
 from tests.remote_support import (
     KEY_ID,
     SECRET,
@@ -31,6 +34,8 @@ from tests.remote_support import (
     s3_server,
     upload,
 )
+from tests.speed.support import plain
+from tests.speed.test_index_reading import mixed_bag
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -301,3 +306,32 @@ def test_check_and_diff_take_urls(tmp_path: Path) -> None:
     assert f"{url} (replayed now)" in diff.stdout
     assert check.returncode == 0, check.stderr
     assert "budget holds" in check.stdout
+
+
+def _read(source: Path | str, local: Path) -> object:
+    """What the inputs layer makes of a recording: messages, warnings, summaries (or the error),
+    a remote one's name put back to the local file's."""
+    name = str(source).rstrip("/")
+    try:
+        with open_recording([source], rosout=True) as recording:
+            messages = [(m.t_ns, m.topic, plain(m.msg)) for m in recording.messages()]
+            warnings = [w.replace(name, str(local)) for w in recording.warnings]
+            inputs = [replace(s, path=s.path.replace(name, str(local))) for s in recording.inputs]
+            return messages, warnings, inputs
+    except InputError as exc:
+        return str(exc).replace(name, str(local))
+
+
+def test_damaged_files_read_the_same_remote_as_local(tmp_path: Path) -> None:
+    source = mixed_bag(tmp_path, frames=8)
+    data = source.read_bytes()
+    structure = [i for i in range(len(data)) if data[i] != 7]  # outside the frames' filler
+    served = tmp_path / "served"
+    served.mkdir()
+    with range_server(served) as (base, _served):
+        for offset in [*structure[:: max(1, len(structure) // 40)], len(data) - 20]:
+            path = flipped(source, served / "flip.mcap", offset)
+            assert _read(f"{base}/flip.mcap", path) == _read(path, path), offset
+        for size in (len(data) // 3, len(data) - 30, len(data) - 1):
+            path = truncated(source, served / "cut.mcap", size)
+            assert _read(f"{base}/cut.mcap", path) == _read(path, path), size
