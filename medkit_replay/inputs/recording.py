@@ -111,14 +111,6 @@ class Recording:
         return min(starts), max(ends)
 
     @property
-    def fetched(self) -> dict[str, tuple[int, int]]:
-        """Remote inputs by name: (bytes fetched, bytes of their files) so far."""
-        tallies: list[Tally] = [
-            fetched() for i in self._inputs if (fetched := getattr(i, "fetched", None))
-        ]
-        return {tally.display: (tally.fetched, tally.size) for tally in tallies}
-
-    @property
     def inputs(self) -> tuple[InputSummary, ...]:
         """One summary per input, in input order; final once :meth:`messages` is exhausted."""
         return tuple(i.summary() for i in self._inputs)

@@ -154,7 +154,7 @@ class _AheadStream(RangeStream):
 
     def readinto(self, buffer: memoryview) -> int:  # type: ignore[override]
         got = super().readinto(buffer)
-        self._reader.will_need(self.tell(), len(buffer))
+        self._reader.will_need(self.tell(), min(len(buffer), STREAM_BLOCK))
         return got
 
 
@@ -228,10 +228,6 @@ class RemoteBag(Rosbag2Input):
 
     def summary(self) -> InputSummary:
         return replace(super().summary(), path=self._remote.location.display.rstrip("/"))
-
-    def fetched(self) -> Tally:
-        """Bytes fetched so far, and the size of what was read remotely."""
-        return self._remote.tally
 
     def close(self) -> None:
         try:
