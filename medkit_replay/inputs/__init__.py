@@ -5,7 +5,9 @@ compression) and bare ``.mcap`` / ``.db3`` files are read streaming and read-onl
 merge in (log time, input index, position) order. Only the topics the replay needs are decoded
 (:class:`Selection`), by decoders generated from the recording's own definitions or bundled
 ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP
-chunks are read through their message indexes.
+chunks are read through their message indexes. Any of these may be named by an ``s3://``,
+``gs://`` or ``http(s)://`` URL instead (:mod:`medkit_replay.inputs.remote`, the ``remote``
+extra): an indexed MCAP is then fetched by ranges, other storage files through a temporary copy.
 Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
 can be read raises :class:`~medkit_replay.errors.InputError`.
 

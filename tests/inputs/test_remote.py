@@ -335,3 +335,20 @@ def test_damaged_files_read_the_same_remote_as_local(tmp_path: Path) -> None:
         for size in (len(data) // 3, len(data) - 30, len(data) - 1):
             path = truncated(source, served / "cut.mcap", size)
             assert _read(f"{base}/cut.mcap", path) == _read(path, path), size
+
+
+def test_an_mcap_without_its_summary_is_streamed_in_blocks(tmp_path: Path) -> None:
+    bag = camera_heavy_bag(tmp_path)
+    mcap = next(bag.glob("*.mcap"))
+    size = mcap.stat().st_size
+    assert size > 8 * 1024 * 1024  # more than one block of the stream
+    served = tmp_path / "served"
+    served.mkdir()
+    cut = truncated(mcap, served / "cut.mcap", size - 1000)  # no footer, no summary
+    with range_server(served) as (base, _served):
+        url = f"{base}/cut.mcap"
+        remote = replay([url], [])
+    text = report_text(remote, url, cut)
+    assert text == dumps(replay([cut], []))
+    assert "scanning the file from the start" in text
+    assert remote.fetched[url][0] >= size - 1000  # every byte, read once per pass
