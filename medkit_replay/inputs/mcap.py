@@ -97,6 +97,19 @@ class _Cursor:
         return self.take(len(self.data) - self.pos)
 
 
+def _plain(head: bytes) -> bool:
+    """Whether a chunk's head declares it uncompressed, without checksum, its size plausible."""
+    _, length, _, _, size, crc, compression = _CHUNK_HEAD.unpack_from(head)
+    if compression or crc or size > RECORD_SIZE_LIMIT:
+        return False
+    declared = int(_U64.unpack_from(head, PLAIN_CHUNK_HEAD - 8)[0])
+    return bool(declared == size and 40 + size <= length)
+
+
+_Plan = tuple[list[int], list[int], list[int], list[bool], list[tuple[int, int]]]
+"""How a chunk is read by index: its records' starts, ends, channels, wanted flags, pieces."""
+
+
 class _ChunkIndex(NamedTuple):
     start_ns: int
     offset: int
@@ -308,13 +321,17 @@ class McapFile:
             self._wanted[cid] = connection is not None and self._accept(connection)
         return self._wanted[cid]
 
+    def _has_wanted(self, chunk: _ChunkIndex) -> bool:
+        """Whether a chunk may hold a wanted message (an index listing no channel: maybe)."""
+        return not chunk.channels or any(self._wants(cid) for cid in chunk.channels)
+
     def _read_indexed(
         self, reader: RangeReader, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         chunks = self._chunks or []
         ahead = 0  # chunks whose head and index are asked for already
         for number, chunk in enumerate(chunks):
-            if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
+            if not self._has_wanted(chunk):
                 continue  # no wanted topic in it: its bytes are never read
             if self.indexed and self._cold:  # the last chunk was not at hand: ask ahead
                 ahead = self._prefetch_heads(reader, chunks, max(ahead, number), number + PREFETCH)
@@ -333,7 +350,11 @@ class McapFile:
             yield Bound(min(chunk.start_ns, cap))
             timed = None
             if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
-                timed = self._by_index(reader, chunk, head)
+                following = next(
+                    (c for c in chunks[number + 1 : number + 1 + PREFETCH] if self._has_wanted(c)),
+                    None,
+                )
+                timed = self._by_index(reader, chunk, head, following)
             if timed is None:
                 body = self._read_into_buffer(reader, chunk.offset + 9, length)
                 yield from self._chunk(body, chunk.offset, cap, count=False)
@@ -370,7 +391,11 @@ class McapFile:
         return view[: reader.read_into(offset, view)]
 
     def _by_index(
-        self, reader: RangeReader, chunk: _ChunkIndex, head: bytes
+        self,
+        reader: RangeReader,
+        chunk: _ChunkIndex,
+        head: bytes,
+        following: _ChunkIndex | None = None,
     ) -> list[Timed[Raw]] | None:
         """The wanted messages of an uncompressed chunk, read through its message indexes.
 
@@ -379,16 +404,86 @@ class McapFile:
         checksummed chunk, an index that does not tile the chunk's records exactly with
         message records, a skipped record of a wanted channel. The whole chunk is then read,
         so both routes deliver the same messages.
+
+        When these bytes were not at hand, the pieces of ``following`` (the next chunk to
+        read) are asked for too if its head and index are: they arrive while this one is used.
         """
-        _, length, _, _, size, crc, compression = _CHUNK_HEAD.unpack_from(head)
-        if compression or crc or size > RECORD_SIZE_LIMIT:
-            return None
-        if _U64.unpack_from(head, PLAIN_CHUNK_HEAD - 8)[0] != size or 40 + size > length:
-            return None
         index_at = chunk.offset + chunk.length
-        if index_at + chunk.index_length > self._data_end:
+        if not _plain(head) or index_at + chunk.index_length > self._data_end:
             return None
-        index = reader.read(index_at, chunk.index_length)
+        plan = self._plan(chunk, head, reader.read(index_at, chunk.index_length))
+        if plan is None:
+            return None
+        starts, ends, channels, flags, pieces = plan
+        base = chunk.offset + PLAIN_CHUNK_HEAD
+        first = reader.cached(base + pieces[0][0], pieces[0][1] - pieces[0][0])
+        self._cold = first is None
+        if self._cold and len(pieces) > 1:  # not at hand: all pieces in flight at once
+            for start, stop in pieces:
+                reader.will_need(base + start, stop - start)
+        if self._cold and following is not None:
+            self._plan_ahead(reader, following)
+        timed: list[Timed[Raw]] = []
+        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
+        connections, file_no, pos = self.connections, self.file_no, chunk.offset
+        k, count = 0, len(starts)
+        for start, stop in pieces:
+            if first is not None:
+                data, first = first, None
+            else:
+                data = reader.read(base + start, stop - start)
+            if len(data) != stop - start:
+                return None
+            while k < count and starts[k] < stop:
+                inner, end = starts[k], ends[k]
+                at = inner - start
+                if end <= stop:
+                    op, record_length, cid, _, t_ns = unpack_message(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9:
+                        return None
+                    if flags[k] if cid == channels[k] else self._wants(cid):
+                        payload = data[at + PAYLOAD_AT : at + 9 + record_length]
+                        timed.append(
+                            _new(
+                                Timed,
+                                (
+                                    t_ns,
+                                    (file_no, pos, inner),
+                                    _new(Raw, (connections[cid], payload)),
+                                ),
+                            )
+                        )
+                else:
+                    op, record_length, cid = unpack_head(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
+                        return None
+                k += 1
+        if timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT:
+            return None  # the careful parser skips and reports it
+        return timed
+
+    def _plan_ahead(self, reader: RangeReader, chunk: _ChunkIndex) -> None:
+        """Ask for the pieces of a chunk whose head and index are at hand (a hint only)."""
+        head = reader.cached(chunk.offset, PLAIN_CHUNK_HEAD)
+        index_at = chunk.offset + chunk.length
+        if head is None or len(head) != PLAIN_CHUNK_HEAD or not chunk.index_length:
+            return
+        if index_at + chunk.index_length > self._data_end:
+            return
+        index = reader.cached(index_at, chunk.index_length)
+        plan = self._plan(chunk, head, index) if index is not None else None
+        if plan is not None:
+            base = chunk.offset + PLAIN_CHUNK_HEAD
+            for start, stop in plan[-1]:
+                reader.will_need(base + start, stop - start)
+
+    def _plan(self, chunk: _ChunkIndex, head: bytes, index: bytes) -> _Plan | None:
+        """How to read an uncompressed chunk by its message index (see :meth:`_by_index`):
+        its records' starts, ends, channels and wanted flags, and the pieces to read; None
+        when it cannot or does not pay."""
+        if not _plain(head):
+            return None
+        size = _CHUNK_HEAD.unpack_from(head)[4]
         total = len(index)
         keys: list[int] = []  # offset << 16 | channel id, per message record
         at = 0
@@ -434,50 +529,7 @@ class McapFile:
             at = ends[k]
         if at < size:
             pieces.append((at, size))
-        base = chunk.offset + PLAIN_CHUNK_HEAD
-        first = reader.cached(base + pieces[0][0], pieces[0][1] - pieces[0][0])
-        self._cold = first is None
-        if self._cold and len(pieces) > 1:  # not at hand: all pieces in flight at once
-            for start, stop in pieces:
-                reader.will_need(base + start, stop - start)
-        timed: list[Timed[Raw]] = []
-        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
-        connections, file_no, pos = self.connections, self.file_no, chunk.offset
-        k, count = 0, len(starts)
-        for start, stop in pieces:
-            if first is not None:
-                data, first = first, None
-            else:
-                data = reader.read(base + start, stop - start)
-            if len(data) != stop - start:
-                return None
-            while k < count and starts[k] < stop:
-                inner, end = starts[k], ends[k]
-                at = inner - start
-                if end <= stop:
-                    op, record_length, cid, _, t_ns = unpack_message(data, at)
-                    if op != OP_MESSAGE or record_length != end - inner - 9:
-                        return None
-                    if flags[k] if cid == channels[k] else self._wants(cid):
-                        payload = data[at + PAYLOAD_AT : at + 9 + record_length]
-                        timed.append(
-                            _new(
-                                Timed,
-                                (
-                                    t_ns,
-                                    (file_no, pos, inner),
-                                    _new(Raw, (connections[cid], payload)),
-                                ),
-                            )
-                        )
-                else:
-                    op, record_length, cid = unpack_head(data, at)
-                    if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
-                        return None
-                k += 1
-        if timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT:
-            return None  # the careful parser skips and reports it
-        return timed
+        return starts, ends, channels, flags, pieces
 
     def _read_linear(
         self, bio: BinaryIO, cap: int
