@@ -352,3 +352,30 @@ def test_an_mcap_without_its_summary_is_streamed_in_blocks(tmp_path: Path) -> No
     assert text == dumps(replay([cut], []))
     assert "scanning the file from the start" in text
     assert remote.fetched[url][0] >= size - 1000  # every byte, read once per pass
+
+
+def test_s3_credentials_come_from_an_aws_profile(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No keys in the environment: the profile's keys sign the requests (seen by the server)."""
+    for name in list(os.environ):
+        if name.startswith("AWS_"):
+            monkeypatch.delenv(name)
+    credentials = tmp_path / "credentials"
+    credentials.write_text(
+        "[robots]\naws_access_key_id = PROFILEKEYID123\naws_secret_access_key = " + SECRET + "\n"
+    )
+    config = tmp_path / "config"
+    config.write_text("[profile robots]\nregion = eu-west-1\n")
+    served_root = tmp_path / "served"
+    (served_root / "fleet-bags").mkdir(parents=True)
+    shutil.copy(SAMPLES / "service_calls.mcap", served_root / "fleet-bags" / "run.mcap")
+    with range_server(served_root) as (base, served):
+        monkeypatch.setenv("AWS_ENDPOINT_URL", base)  # path-style requests: /bucket/key
+        monkeypatch.setenv("AWS_PROFILE", "robots")
+        monkeypatch.setenv("AWS_SHARED_CREDENTIALS_FILE", str(credentials))
+        monkeypatch.setenv("AWS_CONFIG_FILE", str(config))
+        same_as_local("s3://fleet-bags/run.mcap", SAMPLES / "service_calls.mcap", [])
+    signatures = [h.get("authorization", "") for _, h in served.seen]
+    assert signatures and all("Credential=PROFILEKEYID123/" in s for s in signatures)
+    assert all("/eu-west-1/s3/" in s for s in signatures)  # the profile's region
