@@ -9,6 +9,7 @@ close. Reports name the input by its URL, never a temporary path.
 from __future__ import annotations
 
 import io
+import threading
 from bisect import bisect_right, insort
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import replace
@@ -69,6 +70,7 @@ class RemoteRanges:
         self._remote = remote
         self.size = remote.size
         self._pool = ThreadPoolExecutor(CONCURRENCY, thread_name_prefix="medkit-replay-fetch")
+        self._stop = threading.Event()  # set on close: fetches in flight try no more
         self._pending: list[tuple[int, int]] = []
         self._blocks: dict[int, tuple[int, Future[bytes]]] = {}  # start -> (end, fetch)
         self._starts: list[int] = []
@@ -99,7 +101,8 @@ class RemoteRanges:
         for start, end in merged:
             if start in self._blocks or self._covering(start, end) is not None:
                 continue
-            self._blocks[start] = (end, self._pool.submit(self._remote.fetch, start, end))
+            fetch = self._pool.submit(self._remote.fetch, start, end, self._stop)
+            self._blocks[start] = (end, fetch)
             insort(self._starts, start)
             self._held += end - start
         while self._held > READ_AHEAD_LIMIT and len(self._starts) > 1:
@@ -144,6 +147,7 @@ class RemoteRanges:
         exc: BaseException | None,
         traceback: TracebackType | None,
     ) -> None:
+        self._stop.set()
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._blocks.clear()
         self._starts.clear()

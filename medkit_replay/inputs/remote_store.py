@@ -10,7 +10,6 @@ from __future__ import annotations
 import os
 import re
 import threading
-import time
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import urlsplit
@@ -108,7 +107,7 @@ _RETRY: RetryConfig = {
 def _client(*, allow_http: bool) -> ClientConfig:
     return {
         "connect_timeout": timedelta(seconds=10),
-        "timeout": timedelta(seconds=120),
+        "timeout": timedelta(seconds=60),
         "allow_http": allow_http,
     }
 
@@ -235,17 +234,22 @@ class RemoteObject:
             raise self._fail(_problem(exc)[1]) from None
         return int(meta["size"])
 
-    def fetch(self, start: int, end: int) -> bytes:
+    def fetch(self, start: int, end: int, stop: threading.Event | None = None) -> bytes:
         """Bytes ``[start, end)`` (``end`` within the object), asked for again when cut short.
 
+        Args:
+            stop: once set, no further try is made (the reader was closed: Ctrl-C, an error).
+
         Raises:
-            RemoteError: not found, access denied, or still failing after ATTEMPTS tries.
+            RemoteError: not found, access denied, stopped, or still failing after ATTEMPTS
+                tries.
         """
         obstore = _obstore()
         problem = ""
+        pause = stop if stop is not None else threading.Event()  # waits between tries
         for attempt in range(ATTEMPTS):
-            if attempt:
-                time.sleep(BACKOFF_S * 2 ** (attempt - 1))
+            if attempt and pause.wait(BACKOFF_S * 2 ** (attempt - 1)):
+                raise self._fail("reading stopped")
             try:
                 data = obstore.get_range(self.store, self.location.key, start=start, end=end)
             except Exception as exc:
