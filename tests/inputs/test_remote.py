@@ -24,6 +24,7 @@ import pytest
 from medkit_replay import replay
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import open_recording
+from medkit_replay.inputs.remote_store import open_store, parse_location
 from medkit_replay.outputs.json_report import dumps
 from tests.inputs.builders import diag, flipped, string_msg, truncated, write_bag
 from tests.remote_support import (
@@ -379,3 +380,34 @@ def test_s3_credentials_come_from_an_aws_profile(
     signatures = [h.get("authorization", "") for _, h in served.seen]
     assert signatures and all("Credential=PROFILEKEYID123/" in s for s in signatures)
     assert all("/eu-west-1/s3/" in s for s in signatures)  # the profile's region
+
+
+@pytest.mark.parametrize(
+    ("url", "display"),
+    [
+        ("s3://bags/robot7/run.mcap", "s3://bags/robot7/run.mcap"),
+        ("gs://bags/robot7/", "gs://bags/robot7/"),
+        ("HTTPS://Files.Example:8443/m/run.db3", "https://files.example:8443/m/run.db3"),
+    ],
+)
+def test_urls_are_named_as_given_and_each_scheme_has_its_store(url: str, display: str) -> None:
+    location = parse_location(url)
+    assert location.display == display
+    kinds = {"s3": "S3Store", "gs": "GCSStore", "https": "HTTPStore"}
+    assert type(open_store(location)).__name__ == kinds[location.scheme]  # no request is made
+
+
+@pytest.mark.parametrize(
+    "url",
+    [
+        f"https://robot:{SECRET}@files.example/run.mcap",
+        f"https://files.example/run.mcap?token={SECRET}",
+        f"s3://bags/run.mcap#{SECRET}",
+        "s3:///run.mcap",
+        "ftp://files.example/run.mcap",
+    ],
+)
+def test_urls_with_secrets_or_without_a_bucket_are_refused_without_showing_them(url: str) -> None:
+    with pytest.raises(InputError) as caught:
+        parse_location(url)
+    assert SECRET not in str(caught.value)
