@@ -79,6 +79,8 @@ class Result:
     snapshots: tuple[SnapshotCapture, ...] = ()
     recordings: tuple[EvidenceRecording, ...] = ()
     evidence_notes: tuple[str, ...] = ()
+    fetched: dict[str, tuple[int, int]] = field(default_factory=dict)
+    """Remote inputs by name: (bytes fetched, bytes of their files); not in the JSON report."""
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

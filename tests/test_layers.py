@@ -54,8 +54,9 @@ def test_engine_sources_never_read_a_clock() -> None:
 
 
 def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipeline() -> None:
-    # follow mode polls with time.monotonic/time.sleep in inputs/follow.py alone; what the
-    # replay computes keeps bag time (the pipeline reads no clock either).
+    # follow mode polls with time.monotonic/time.sleep in inputs/follow.py, and a remote read
+    # waits before a retry in inputs/remote_store.py; what the replay computes keeps bag time
+    # (the pipeline reads no clock either).
     root = Path(__file__).resolve().parents[1] / "medkit_replay"
     users = sorted(
         str(path.relative_to(root))
@@ -63,7 +64,15 @@ def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipelin
         for path in (root / folder).rglob("*.py")
         if any(needle in path.read_text() for needle in ("import time", "monotonic", "sleep("))
     )
-    assert users == ["inputs/follow.py"]
+    assert users == ["inputs/follow.py", "inputs/remote_store.py"]
+
+
+def test_remote_clients_load_only_for_remote_inputs() -> None:
+    """inputs.ranges, inputs.remote and inputs.remote_store: obstore (the 'remote' extra) and
+    boto3 are imported when a URL is opened, never by the CLI or a local replay."""
+    loaded = loaded_after("medkit_replay.pipeline")
+    assert {"medkit_replay.inputs.remote", "medkit_replay.inputs.ranges"} <= loaded
+    assert sorted(m for m in loaded if m.startswith(("obstore", "boto3", "botocore"))) == []
 
 
 def test_bridges_do_not_import_outputs_or_inputs() -> None:

@@ -10,12 +10,38 @@ from typing import TYPE_CHECKING
 
 import click
 
+from medkit_replay.inputs import is_remote
+
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterable
 
     from click.decorators import FC
 
 CONFIG_HELP = "ROS 2 parameter file (repeatable; later files override earlier ones)."
+
+
+def as_input(value: str) -> Path | str:
+    """A recording argument: a local path, or an ``s3://``, ``gs://``, ``http(s)://`` URL kept
+    as written (a Path would fold its ``//``)."""
+    return value if is_remote(value) else Path(value)
+
+
+def _as_inputs(
+    _ctx: click.Context, _param: click.Parameter, value: str | tuple[str, ...]
+) -> Path | str | tuple[Path | str, ...]:
+    return as_input(value) if isinstance(value, str) else tuple(map(as_input, value))
+
+
+def input_argument(name: str, *, many: bool = True) -> Callable[[FC], FC]:
+    """A recording argument (``many``: one or more) taking local paths and URLs alike."""
+    return click.argument(
+        name, nargs=-1 if many else 1, required=True, type=str, callback=_as_inputs
+    )
+
+
+def local_paths(inputs: Iterable[Path | str]) -> list[Path]:
+    """The inputs that are local paths (a URL cannot be overwritten by an output)."""
+    return [path for path in inputs if isinstance(path, Path)]
 
 
 def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:

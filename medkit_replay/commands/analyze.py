@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
@@ -72,7 +72,7 @@ _REPORT_OPTIONS = (
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @config_option()
 @report_options
 @click.option(
@@ -97,7 +97,7 @@ _REPORT_OPTIONS = (
 )
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
 def analyze(
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     json_out: str | None,
     csv_dir: Path | None,
@@ -118,6 +118,7 @@ def analyze(
       medkit-replay analyze bag/ --html report.html
       medkit-replay analyze mission/ --mcap replayed.mcap --parquet tables/
       medkit-replay analyze mission/ --config capture.yaml --graph graph.txt --evidence clips/
+      medkit-replay analyze s3://fleet-bags/robot7/mission_0412/ --config robot_params.yaml
     """
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
@@ -130,7 +131,7 @@ def analyze(
     read = (*inputs, graph_file) if graph_file is not None else inputs
     chosen, writers = prepare_reports(read, configs, json_out, targets)
     if evidence_dir is not None:
-        refuse_inside_inputs(evidence_dir, inputs)
+        refuse_inside_inputs(evidence_dir, local_paths(inputs))
     evidence = EvidenceOptions(
         graph=load_graph(graph_file) if graph_file is not None else None,
         directory=evidence_dir,
@@ -147,7 +148,7 @@ def analyze(
 
 
 def prepare_reports(
-    inputs: Sequence[Path],
+    inputs: Sequence[Path | str],
     configs: Sequence[Path],
     json_out: str | None,
     targets: dict[str, Path | None],
@@ -161,7 +162,7 @@ def prepare_reports(
         (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
-    refuse_overlap([*inputs, *config_files(configs)], _output_paths(json_out, chosen))
+    refuse_overlap([*local_paths(inputs), *config_files(configs)], _output_paths(json_out, chosen))
     return chosen, writers
 
 
@@ -203,7 +204,7 @@ def write_reports(
                 print_summary(result, sys.stdout)
 
 
-def refuse_inside_inputs(directory: Path, inputs: tuple[Path, ...]) -> None:
+def refuse_inside_inputs(directory: Path, inputs: Sequence[Path]) -> None:
     """Inputs are sacred: recordings are never written into (or over) an input."""
     target = directory.resolve()
     for path in inputs:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
@@ -28,7 +28,7 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @click.option(
     "--budget",
     "budget_path",
@@ -57,7 +57,7 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
 @click.pass_context
 def check(
     ctx: click.Context,
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     budget_path: Path,
     configs: tuple[Path, ...],
     merge: bool,
@@ -84,14 +84,14 @@ def check(
 
     budget = load_budget(budget_path)  # a bad budget fails before any replay
     protected = config_files(configs)  # so does a bad config
-    for path in inputs:
+    for path in local_paths(inputs):
         if not os.path.lexists(path):
             raise InputError("input not found", path=str(path))
     summary_path = os.environ.get(SUMMARY_ENV) if github else None
     outputs = [("--junit", junit_out)] if junit_out is not None else []
     if summary_path:
         outputs.append((f"${SUMMARY_ENV}", Path(summary_path)))
-    refuse_overlap([*inputs, *protected, budget_path], outputs)
+    refuse_overlap([*local_paths(inputs), *protected, budget_path], outputs)
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
     for group in groups:
@@ -114,7 +114,7 @@ def check(
         ctx.exit(1)
 
 
-def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -> CheckRun:
+def _check_group(budget: Budget, group: list[Path | str], configs: tuple[Path, ...]) -> CheckRun:
     """Replay one run and check it; a recording that cannot be read is a failed run saying why
     (a config problem is still the whole command's, exit 2)."""
     from medkit_replay.checks.evaluate import check_run, unreadable_run  # noqa: PLC0415
@@ -123,7 +123,7 @@ def _check_group(budget: Budget, group: list[Path], configs: tuple[Path, ...]) -
 
     labels = [str(path) for path in group]
     try:
-        for path in group:
+        for path in local_paths(group):
             if not path.is_dir():
                 check_regular(path)  # a FIFO would block its reader
         bar = progress_bar(sys.stderr)

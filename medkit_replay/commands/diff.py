@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import REPORT_COMPRESSIONS, open_regular
@@ -28,16 +28,16 @@ if TYPE_CHECKING:
 REPORT_SUFFIXES = (".json", *(f".json{suffix}" for suffix in REPORT_COMPRESSIONS))
 
 
-def is_report_path(path: Path) -> bool:
-    """A ``.json`` file (or ``.json.gz``, ``.json.zst``) is read as a report; anything else is a
-    recording or script to replay."""
-    return path.name.lower().endswith(REPORT_SUFFIXES)
+def is_report_path(path: Path | str) -> bool:
+    """A local ``.json`` file (or ``.json.gz``, ``.json.zst``) is read as a report; anything
+    else is a recording or script to replay (a URL is a recording)."""
+    return isinstance(path, Path) and path.name.lower().endswith(REPORT_SUFFIXES)
 
 
 class _Side:
     """One side of the diff: a report read from a file, or a recording replayed now."""
 
-    def __init__(self, path: Path, configs: tuple[Path, ...], *, quiet: bool) -> None:
+    def __init__(self, path: Path | str, configs: tuple[Path, ...], *, quiet: bool) -> None:
         from medkit_replay.diffing import read_report  # noqa: PLC0415
         from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
         from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
@@ -45,7 +45,7 @@ class _Side:
 
         self.path = path
         self.result: Result | None = None
-        if is_report_path(path):
+        if isinstance(path, Path) and is_report_path(path):
             self.report = read_report(path)
             return
         bar = progress_bar(sys.stderr, quiet=quiet)
@@ -76,6 +76,7 @@ def _write_baseline(baseline: Path, current: _Side) -> None:
                 with open_regular(current.path) as source:  # its bytes as they are
                     shutil.copyfileobj(source, raw)
             else:
+                assert isinstance(current.path, Path)  # read from a file: a URL is replayed
                 text = report_bytes(current.path)
                 with compressed(raw, report_compression(baseline)) as stream:
                     stream.write(text)
@@ -106,7 +107,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
 
 @click.command()
 @click.argument("baseline", type=click.Path(path_type=Path))
-@click.argument("current", type=click.Path(path_type=Path))
+@input_argument("current", many=False)
 @config_option("ROS 2 parameter file for a side that is replayed (repeatable).")
 @click.option(
     "--time-tolerance",
@@ -134,7 +135,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
 def diff(
     ctx: click.Context,
     baseline: Path,
-    current: Path,
+    current: Path | str,
     configs: tuple[Path, ...],
     time_tolerance: float,
     json_out: str | None,
@@ -160,7 +161,8 @@ def diff(
     tolerance = tolerance_ns(time_tolerance)
     if json_out is not None and json_out != "-":
         refuse_overlap(
-            [baseline, current, *config_files(configs, check=False)], [("--json", Path(json_out))]
+            [*local_paths([baseline, current]), *config_files(configs, check=False)],
+            [("--json", Path(json_out))],
         )
     if update and not is_report_path(baseline):
         raise MedkitReplayError(

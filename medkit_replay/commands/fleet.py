@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 
@@ -33,7 +33,7 @@ def timeout_seconds(
 
 
 @click.command()
-@click.argument("input_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("input_dirs")
 @config_option(
     "ROS 2 parameter file for every run (repeatable; later files override earlier ones)."
 )
@@ -74,7 +74,7 @@ def timeout_seconds(
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
 def fleet(
-    input_dirs: tuple[Path, ...],
+    input_dirs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     budget: Path | None,
     jobs: int | None,
@@ -95,6 +95,7 @@ def fleet(
       medkit-replay fleet missions/ --config robot_params.yaml --out fleet-report
       medkit-replay fleet missions/ --jobs 8 --timeout 600 --quiet
       medkit-replay fleet /shared/missions --dask tcp://scheduler:8786
+      medkit-replay fleet s3://fleet-bags/2026-03/ --dask tcp://scheduler:8786
     """
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
@@ -120,7 +121,7 @@ def fleet(
     )
     from medkit_replay.fleet.terminal import fleet_progress, print_summary  # noqa: PLC0415
 
-    protected = [*input_dirs, *config_paths, *([budget] if budget is not None else [])]
+    protected = [*local_paths(input_dirs), *config_paths, *([budget] if budget is not None else [])]
     refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])
     recordings = discover(input_dirs)
     if not recordings:

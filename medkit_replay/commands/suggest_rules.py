@@ -115,7 +115,7 @@ def suggest_rules(
             "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
             path=", ".join(str(d) for d in inputs),
         )
-    jobs_list = [(str(p.absolute()), str(p)) for p in recordings]
+    jobs_list = [(p if isinstance(p, str) else str(p.absolute()), str(p)) for p in recordings]
     base = tuple(str(Path(c).absolute()) for c in configs)
     observed: list[Observed | None] = [None] * len(recordings)
 

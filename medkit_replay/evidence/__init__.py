@@ -68,7 +68,7 @@ class Evidence:
 def collect_evidence(
     config: SnapshotConfig,
     options: EvidenceOptions,
-    inputs: Iterable[Path],
+    inputs: Iterable[Path | str],
     transitions: Iterable[Transition],
     reports: Iterable[ReportRecord],
     recorded_topics: Iterable[str],
@@ -88,7 +88,7 @@ def collect_evidence(
 def _collect(
     config: SnapshotConfig,
     options: EvidenceOptions,
-    inputs: Iterable[Path],
+    inputs: Iterable[Path | str],
     transitions: Iterable[Transition],
     reports: Iterable[ReportRecord],
     recorded_topics: Iterable[str],

@@ -189,11 +189,17 @@ class EvidenceSource:
         skipped: files that could not be opened for evidence, with why.
     """
 
-    def __init__(self, inputs: Iterable[Path]) -> None:
+    def __init__(self, inputs: Iterable[Path | str]) -> None:
         self.files: list[_File] = []
         self.skipped: list[str] = []
         self.topics: dict[str, TopicInfo] = {}
         for path in inputs:
+            if isinstance(path, str):
+                self.skipped.append(
+                    f"{path}: not read for evidence: a remote recording (download it to "
+                    "capture its freeze frames and recordings)"
+                )
+                continue
             for file in storage_files(path):
                 try:
                     if file.suffix.lower() == ".zstd":

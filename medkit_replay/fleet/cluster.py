@@ -99,12 +99,12 @@ def _run_labelled(
 
 def _failed_labelled(job: tuple[str, str], problem: str) -> RunSummary:
     path, label = job
-    return RunSummary(path=label, kind=run_kind(Path(path)), error=f"{label}: {problem}")
+    return RunSummary(path=label, kind=run_kind(path), error=f"{label}: {problem}")
 
 
 def run_on_dask(
     address: str,
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,
@@ -131,7 +131,7 @@ def run_on_dask(
             on_done(index, summary)
 
     absolute_configs = tuple(str(Path(c).absolute()) for c in configs)
-    jobs = [(str(p.absolute()), str(p)) for p in paths]
+    jobs = [(p if isinstance(p, str) else str(p.absolute()), str(p)) for p in paths]
     task = partial(_run_labelled, configs=absolute_configs, budget=budget)
     run_jobs_on_dask(address, jobs, task, _failed_labelled, timeout=timeout, on_done=done)
     return [r for r in results if r is not None]

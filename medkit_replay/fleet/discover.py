@@ -15,19 +15,25 @@ Rules (README "Fleets"):
 
 The order is deterministic: the given folders in order, each one's recordings sorted by path
 (numbers in names compared as numbers); a recording reached twice is listed once.
+
+A root may also be an ``s3://`` or ``gs://`` prefix: the same rules apply to the objects under
+it (a bag folder is listed as its URL ending in ``/``; scripts are read from local files only).
 """
 
 from __future__ import annotations
 
 import re
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
+from medkit_replay.inputs import is_remote
 from medkit_replay.inputs.recording import READERS, input_kind
+from medkit_replay.inputs.remote_store import list_objects, open_store, parse_location
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
+    from pathlib import PurePath
 
 FILE_KINDS = frozenset(kind for kind in READERS if kind != "dir")
 """Suffixes of files replayed on their own: ``.mcap``, ``.db3``, ``.bag``, ``.jsonl``."""
@@ -36,7 +42,7 @@ STORAGE_SUFFIXES = frozenset({".mcap", ".db3"})
 _NUMBER = re.compile(r"(\d+)")
 
 
-def natural_key(path: Path) -> tuple[tuple[tuple[int, int | str], ...], ...]:
+def natural_key(path: PurePath) -> tuple[tuple[tuple[int, int | str], ...], ...]:
     """A sort key for paths comparing numbers in names as numbers (``run_2`` before ``run_10``;
     ``run_02`` before ``run_2``, so that the order stays total)."""
     return tuple(
@@ -48,9 +54,8 @@ def natural_key(path: Path) -> tuple[tuple[tuple[int, int | str], ...], ...]:
     )
 
 
-def _storage_stem(path: Path) -> str | None:
+def _storage_stem(name: str) -> str | None:
     """The name of a storage file without its suffixes; None for any other file."""
-    name = path.name
     if name.lower().endswith(".zstd"):
         name = name[: -len(".zstd")]
     stem, dot, suffix = name.rpartition(".")
@@ -68,10 +73,19 @@ def is_bag_directory(directory: Path, files: Iterable[Path]) -> bool:
     """
     if (directory / "metadata.yaml").is_file():
         return True
-    stems = [stem for stem in map(_storage_stem, files) if stem is not None]
+    return is_bag_folder(directory.name, [f.name for f in files])
+
+
+def is_bag_folder(name: str, file_names: Iterable[str]) -> bool:
+    """The rule on names alone: a folder (or remote prefix) called ``name`` holding these
+    files is one recording."""
+    names = list(file_names)
+    if "metadata.yaml" in names:
+        return True
+    stems = [stem for stem in map(_storage_stem, names) if stem is not None]
     if not stems:
         return False
-    split = re.compile(re.escape(directory.name) + r"(_\d+)?")
+    split = re.compile(re.escape(name) + r"(_\d+)?")
     return all(split.fullmatch(stem) for stem in stems)
 
 
@@ -104,7 +118,46 @@ def _walk(root: Path) -> list[Path]:
     return found
 
 
-def discover(roots: Iterable[str | Path]) -> list[Path]:
+def _walk_remote(url: str) -> list[str]:
+    """The recordings under a bucket prefix, as URLs, sorted as local ones are.
+
+    Raises:
+        InputError: not a bucket URL, the extra is missing, or the prefix cannot be listed.
+    """
+    location = parse_location(url)
+    if location.scheme not in ("s3", "gs"):
+        raise InputError("an HTTP server cannot be listed; give the recordings' own URLs", path=url)
+    prefix = location.key.rstrip("/") + "/" if location.key.strip("/") else ""
+    folders: dict[str, list[str]] = {}  # folder under the prefix -> names of its files
+    for key, _size in list_objects(open_store(location), location):
+        relative = PurePosixPath(key[len(prefix) :])
+        if any(part.startswith(".") for part in relative.parts):
+            continue
+        folders.setdefault(str(relative.parent), []).append(relative.name)
+    root_name = PurePosixPath(prefix).name or location.bucket
+    if "." in folders and is_bag_folder(root_name, folders["."]):
+        return [location.display.rstrip("/") + "/"]  # the prefix is one recording
+    bags = sorted(
+        (f for f in folders if f != "." and is_bag_folder(PurePosixPath(f).name, folders[f])),
+        key=len,
+    )
+    kept: list[str] = []  # bag folders, none inside another
+    for folder in bags:
+        if not any(folder.startswith(f"{outer}/") for outer in kept):
+            kept.append(folder)
+    found = [PurePosixPath(f"{folder}/") for folder in kept]
+    for folder, names in folders.items():
+        if folder in kept or any(folder.startswith(f"{outer}/") for outer in kept):
+            continue
+        found += [PurePosixPath(folder, name) for name in names if _storage_stem(name) is not None]
+    base = location.display[: len(location.display) - len(location.key)] + prefix
+    return [
+        base + str(path) + ("/" if str(path) in kept else "")
+        for path in sorted(found, key=natural_key)
+    ]
+
+
+def discover(roots: Iterable[str | Path]) -> list[Path | str]:
     """Every recording under the given folders, each once, in a deterministic order.
 
     A root may also be a recording itself (a bag folder, or a file of a kind READERS knows).
@@ -112,9 +165,15 @@ def discover(roots: Iterable[str | Path]) -> list[Path]:
     Raises:
         InputError: a root does not exist, cannot be listed, or is a file of no known kind.
     """
-    recordings: list[Path] = []
-    seen: set[Path] = set()
+    recordings: list[Path | str] = []
+    seen: set[Path | str] = set()
     for raw in roots:
+        if is_remote(raw):
+            for url in _walk_remote(str(raw)):
+                if url not in seen:
+                    seen.add(url)
+                    recordings.append(url)
+            continue
         root = Path(raw)
         if not root.exists():
             raise InputError("input folder not found", path=str(root))

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, replace
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
+from medkit_replay.inputs import is_remote
 from medkit_replay.inputs.recording import input_kind
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
@@ -83,9 +84,29 @@ class RunSummary:
         return self.end_ns - self.start_ns
 
 
-def run_kind(path: Path) -> str:
-    """The ``kind`` of a run for a recording path (see :class:`RunSummary`)."""
-    kind = input_kind(path)
+def opened_recording(path: Path | str) -> Path | str:
+    """What a run replays for a recording it was handed: a URL as it is; a local path, once it
+    is known not to be a FIFO or a device named like a recording (its reader would block).
+
+    Raises:
+        FileRefusedError: the local path is no regular file or folder.
+    """
+    if isinstance(path, str) and is_remote(path):
+        return path
+    recording = Path(path)
+    if recording.exists() and not recording.is_dir():
+        check_regular(recording)
+    return recording
+
+
+def run_kind(path: Path | str) -> str:
+    """The ``kind`` of a run for a recording path or URL (see :class:`RunSummary`)."""
+    if isinstance(path, str) and is_remote(path):
+        kind = "dir" if path.endswith("/") else PurePosixPath(path).suffix.lower()
+        if kind not in KINDS:
+            kind = "dir"  # a prefix named without its "/"
+    else:
+        kind = input_kind(Path(path))
     return KINDS.get(kind, kind.lstrip(".") or "unknown")
 
 
@@ -145,10 +166,8 @@ def run_one(
     shown = str(path) if label is None else label
     kind = "unknown"
     try:
-        recording = Path(path)
-        kind = run_kind(recording)
-        if recording.exists() and not recording.is_dir():
-            check_regular(recording)  # a FIFO named like a recording would block its reader
+        kind = run_kind(path)
+        recording = opened_recording(path)
         result = replay([recording], list(configs))
         summary = summarize(shown, kind, result)
         if budget is not None:
@@ -215,7 +234,7 @@ def summary_problem(summary: RunSummary) -> str | None:
     return None
 
 
-def failed_run(path: Path, error: BaseException | str) -> RunSummary:
+def failed_run(path: Path | str, error: BaseException | str) -> RunSummary:
     """A run that failed outside ``run_one`` (its worker died or ran out of time)."""
     problem = error if isinstance(error, str) else describe_error(error)
     return RunSummary(path=str(path), kind=run_kind(path), error=f"{path}: {problem}")

@@ -137,7 +137,7 @@ class _Worker:
 
 
 def run_all(
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     configs: Sequence[Path] = (),
     *,
     budget: Budget | None = None,

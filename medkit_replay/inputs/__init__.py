@@ -6,7 +6,9 @@ the ROS 2 types the bridges read) are read streaming and read-only; several inpu
 merge in (log time, input index, position) order. Only the topics the replay needs are decoded
 (:class:`Selection`), by decoders generated from the recording's own definitions or bundled
 ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP
-chunks are read through their message indexes.
+chunks are read through their message indexes. Any of these may be named by an ``s3://``,
+``gs://`` or ``http(s)://`` URL instead (:mod:`medkit_replay.inputs.remote`, the ``remote``
+extra): an indexed MCAP is then fetched by ranges, other storage files through a temporary copy.
 Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
 can be read raises :class:`~medkit_replay.errors.InputError`. A recording still being written is
 followed with ``open_recording(..., follow=Follow())``: its files are read as they grow and appear
@@ -20,6 +22,7 @@ followed with ``open_recording(..., follow=Follow())``: its files are read as th
 
 from medkit_replay.inputs.follow import Follow
 from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
+from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.selection import Role, Selection
 from medkit_replay.inputs.source import Input, InputContext, Message, Opener
 from medkit_replay.msgdefs import normalize_typename
@@ -35,6 +38,7 @@ __all__ = [
     "Role",
     "Selection",
     "input_kind",
+    "is_remote",
     "normalize_typename",
     "open_recording",
 ]

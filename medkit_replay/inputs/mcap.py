@@ -1,6 +1,7 @@
 """MCAP storage files: a streaming reader that uses the chunk index when intact, else scans.
 
 Read-only and bounded: a length field is obeyed only within the file and RECORD_SIZE_LIMIT.
+Bytes come through a RangeReader (inputs.ranges): a local file or a remote object alike.
 Uncompressed chunks without a checksum are read through their message indexes when that skips
 most of their bytes (only the wanted records are read); anything irregular falls back to reading
 the whole chunk, so what is delivered never depends on the route taken.
@@ -8,9 +9,7 @@ the whole chunk, so what is delivered never depends on the route taken.
 
 from __future__ import annotations
 
-import os
 from binascii import crc32
-from contextlib import suppress
 from functools import cache
 from operator import itemgetter, sub
 from struct import Struct
@@ -18,13 +17,15 @@ from typing import TYPE_CHECKING, BinaryIO, NamedTuple
 
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
-    from io import FileIO
     from pathlib import Path
+
+    from medkit_replay.inputs.ranges import ByteSource, RangeReader
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = (
@@ -45,11 +46,7 @@ SKIP_AT_LEAST = 16 * 1024
 """An unwanted record this long is skipped when reading by index (only its header is read)."""
 
 PREFETCH = 4
-"""Chunks ahead whose heads and message indexes are requested from the kernel while reading."""
-_prefetch = getattr(os, "posix_fadvise", None)  # not on every platform
-_WILLNEED = getattr(os, "POSIX_FADV_WILLNEED", 3)
-_NOWAIT = getattr(os, "RWF_NOWAIT", 0)
-_preadv = getattr(os, "preadv", None) if _NOWAIT else None
+"""Chunks ahead whose heads and message indexes are asked for (read-ahead hints) while reading."""
 
 _CHUNK_HEAD = Struct("<BQQQQII")  # opcode, length, start, end, size, crc, compression length
 _U64 = Struct("<Q")
@@ -101,6 +98,19 @@ class _Cursor:
         return self.take(len(self.data) - self.pos)
 
 
+def _plain(head: bytes) -> bool:
+    """Whether a chunk's head declares it uncompressed, without checksum, its size plausible."""
+    _, length, _, _, size, crc, compression = _CHUNK_HEAD.unpack_from(head)
+    if compression or crc or size > RECORD_SIZE_LIMIT:
+        return False
+    declared = int(_U64.unpack_from(head, PLAIN_CHUNK_HEAD - 8)[0])
+    return bool(declared == size and 40 + size <= length)
+
+
+_Plan = tuple[list[int], list[int], list[int], list[bool], list[tuple[int, int]]]
+"""How a chunk is read by index: its records' starts, ends, channels, wanted flags, pieces."""
+
+
 class _ChunkIndex(NamedTuple):
     start_ns: int
     offset: int
@@ -134,14 +144,21 @@ class McapFile:
     storage = "mcap"
 
     def __init__(
-        self, path: Path, file_no: int, warn: Callable[[str], None], *, indexed: bool = True
+        self,
+        path: Path,
+        file_no: int,
+        warn: Callable[[str], None],
+        *,
+        indexed: bool = True,
+        source: ByteSource | None = None,
     ) -> None:
         self.path = path
+        self._source = source if source is not None else LocalSource(path)
         self.file_no = file_no
         self.warn = warn
         self.indexed = indexed  # False: always read whole chunks
         self._buffer = bytearray()
-        self._cold = True  # the chunk being read comes from the disk, not the page cache
+        self._cold = True  # the chunk being read is not at hand (not in the page cache)
         self.connections: dict[int, Connection] = {}
         self.counts: dict[int, int] = {}
         self.start_ns: int | None = None
@@ -151,18 +168,18 @@ class McapFile:
         self._wanted: dict[int, bool] = {}
         self._unknown_channels = 0
         try:
-            with path.open("rb") as bio:
-                self._size = os.fstat(bio.fileno()).st_size
-                self._probe(bio)
+            with self._source.ranges() as reader:
+                self._size = reader.size
+                self._probe(reader)
         except OSError as exc:
             raise NotABagError(f"cannot read: {exc.strerror or exc}") from None
 
     # -- probing -------------------------------------------------------------------------------
 
-    def _probe(self, bio: BinaryIO) -> None:
+    def _probe(self, reader: RangeReader) -> None:
         if self._size == 0:
             raise NotABagError("empty file, not an MCAP file")
-        head = bio.read(len(MAGIC) + 9)
+        head = reader.read(0, len(MAGIC) + 9)
         if head[: len(MAGIC)] != MAGIC:
             raise NotABagError("not an MCAP file (bad magic)")
         if len(head) < len(MAGIC) + 9 or head[len(MAGIC)] != OP_HEADER:
@@ -172,25 +189,24 @@ class McapFile:
         if self._data_start > self._size:
             raise NotABagError("MCAP file cut off inside its header record")
         try:
-            profile = _Cursor(bio.read(length)).string()
+            profile = _Cursor(reader.read(len(head), length)).string()
         except _DamageError:
             raise NotABagError("MCAP header record is damaged") from None
         if profile != "ros2":
             self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
         self._data_end = self._size
-        problem = self._read_footer_and_summary(bio)
+        problem = self._read_footer_and_summary(reader)
         if self._chunks is None:
             self.counts.clear()
             self.start_ns = self.end_ns = None
             if problem:
                 self.warn(f"{self.path}: {problem}; scanning the file from the start")
 
-    def _read_footer_and_summary(self, bio: BinaryIO) -> str | None:
+    def _read_footer_and_summary(self, reader: RangeReader) -> str | None:
         footer_pos = self._size - FOOTER_SIZE
         if footer_pos < self._data_start:
             return NO_FOOTER
-        bio.seek(footer_pos)
-        footer = bio.read(FOOTER_SIZE)
+        footer = reader.read(footer_pos, FOOTER_SIZE)
         if footer[-len(MAGIC) :] != MAGIC or footer[0] != OP_FOOTER:
             return NO_FOOTER
         cur = _Cursor(footer[9:29])
@@ -202,8 +218,7 @@ class McapFile:
             return f"footer points to a summary at byte {summary_start}, outside the file"
         if footer_pos - summary_start > RECORD_SIZE_LIMIT:
             return f"summary section of {footer_pos - summary_start} bytes is implausible"
-        bio.seek(summary_start)
-        summary = bio.read(footer_pos - summary_start)
+        summary = reader.read(summary_start, footer_pos - summary_start)
         if summary_crc and crc32(summary + footer[:25]) != summary_crc:
             return "summary section fails its checksum"
         try:
@@ -290,10 +305,10 @@ class McapFile:
         for cid in sorted(self.connections):
             self._wants(cid)  # every declared topic is classified, read or not
         if self._chunks is not None:
-            with self.path.open("rb", buffering=0) as raw:
-                yield from self._read_indexed(raw, cap)
+            with self._source.ranges() as reader:
+                yield from self._read_indexed(reader, cap)
         else:
-            with self.path.open("rb") as bio:
+            with self._source.stream() as bio:
                 yield from self._read_linear(bio, cap)
         if self._unknown_channels:
             self.warn(
@@ -307,18 +322,21 @@ class McapFile:
             self._wanted[cid] = connection is not None and self._accept(connection)
         return self._wanted[cid]
 
+    def _has_wanted(self, chunk: _ChunkIndex) -> bool:
+        """Whether a chunk may hold a wanted message (an index listing no channel: maybe)."""
+        return not chunk.channels or any(self._wants(cid) for cid in chunk.channels)
+
     def _read_indexed(
-        self, bio: FileIO, cap: int
+        self, reader: RangeReader, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         chunks = self._chunks or []
         ahead = 0  # chunks whose head and index are asked for already
         for number, chunk in enumerate(chunks):
-            if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
+            if not self._has_wanted(chunk):
                 continue  # no wanted topic in it: its bytes are never read
-            if self.indexed and self._cold:  # the last chunk came from the disk: ask ahead
-                ahead = self._prefetch_heads(bio, chunks, max(ahead, number), number + PREFETCH)
-            bio.seek(chunk.offset)
-            head = bio.read(PLAIN_CHUNK_HEAD)
+            if self.indexed and self._cold:  # the last chunk was not at hand: ask ahead
+                ahead = self._prefetch_heads(reader, chunks, max(ahead, number), number + PREFETCH)
+            head = reader.read(chunk.offset, PLAIN_CHUNK_HEAD)
             length = int.from_bytes(head[1:9], "little") if len(head) >= 9 else -1
             if (
                 head[:1] != bytes([OP_CHUNK])
@@ -333,55 +351,37 @@ class McapFile:
             yield Bound(min(chunk.start_ns, cap))
             timed = None
             if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
-                timed = self._by_index(bio, chunk, head)
+                following = next(
+                    (c for c in chunks[number + 1 : number + 1 + PREFETCH] if self._has_wanted(c)),
+                    None,
+                )
+                timed = self._by_index(reader, chunk, head, following)
             if timed is None:
-                body = self._read_into_buffer(bio, chunk.offset + 9, length)
+                body = self._read_into_buffer(reader, chunk.offset + 9, length)
                 yield from self._chunk(body, chunk.offset, cap, count=False)
             elif timed:
                 timed.sort(key=_ORDER)
                 yield Bound(min(timed[0].t_ns, cap))
                 yield timed
 
-    def _cached(self, bio: FileIO, offset: int, length: int) -> bytes | None:
-        """``length`` bytes at ``offset`` if the page cache holds them (no wait), else None.
+    def _prefetch_heads(
+        self, reader: RangeReader, chunks: list[_ChunkIndex], start: int, stop: int
+    ) -> int:
+        """Ask ahead for the heads and message indexes of chunks ``start:stop`` (no wait).
 
-        None also where the system cannot tell (no RWF_NOWAIT); the caller then reads as
-        usual and hints what it will read next (:meth:`_hint`), which a cached file does
-        not need.
-        """
-        if _preadv is None or _prefetch is None:
-            return None
-        buffer = bytearray(length)
-        try:
-            got = _preadv(bio.fileno(), [buffer], offset, _NOWAIT)
-        except OSError:  # BlockingIOError: not cached; others: not supported here
-            return None
-        if got != length and offset + got < self._size:
-            return None  # partly cached: read it as usual
-        return bytes(buffer[:got])
-
-    def _prefetch_heads(self, bio: FileIO, chunks: list[_ChunkIndex], start: int, stop: int) -> int:
-        """Ask the kernel for the heads and message indexes of chunks ``start:stop`` (no wait).
-
-        Reading by index is many small reads; from a cold disk each would wait its turn, so
-        the next chunks' small parts are requested ahead while this one is decoded. A hint
-        only: ranges outside the file are not asked for, and a refusal is ignored.
+        Reading by index is many small reads; from a cold disk or over the network each would
+        wait its turn, so the next chunks' small parts are requested ahead while this one is
+        decoded. A hint only: ranges outside the file are not asked for.
         """
         for chunk in chunks[start:stop]:
             if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
                 continue
-            self._hint(bio, chunk.offset, PLAIN_CHUNK_HEAD)
+            reader.will_need(chunk.offset, PLAIN_CHUNK_HEAD)
             if chunk.index_length:
-                self._hint(bio, chunk.offset + chunk.length, chunk.index_length)
+                reader.will_need(chunk.offset + chunk.length, chunk.index_length)
         return max(start, min(stop, len(chunks)))
 
-    def _hint(self, bio: FileIO, offset: int, length: int) -> None:
-        """Tell the kernel these bytes will be read soon (when it takes such hints)."""
-        if _prefetch is not None and offset >= 0 and 0 < length <= self._size - offset:
-            with suppress(OSError):
-                _prefetch(bio.fileno(), offset, length, _WILLNEED)
-
-    def _read_into_buffer(self, bio: FileIO, offset: int, length: int) -> memoryview:
+    def _read_into_buffer(self, reader: RangeReader, offset: int, length: int) -> memoryview:
         """``length`` bytes at ``offset`` (fewer at the end of the file) in the reused buffer.
 
         The view is valid until the next call; whatever must outlive it is copied out.
@@ -389,16 +389,15 @@ class McapFile:
         if len(self._buffer) < length:
             self._buffer = bytearray(length)  # a new one: views of the old stay valid
         view = memoryview(self._buffer)[:length]
-        bio.seek(offset)
-        done = 0
-        while done < length:
-            got = bio.readinto(view[done:])
-            if not got:
-                break
-            done += got
-        return view[:done]
+        return view[: reader.read_into(offset, view)]
 
-    def _by_index(self, bio: FileIO, chunk: _ChunkIndex, head: bytes) -> list[Timed[Raw]] | None:
+    def _by_index(
+        self,
+        reader: RangeReader,
+        chunk: _ChunkIndex,
+        head: bytes,
+        following: _ChunkIndex | None = None,
+    ) -> list[Timed[Raw]] | None:
         """The wanted messages of an uncompressed chunk, read through its message indexes.
 
         Only the wanted records and the headers of the skipped ones are read. None when that
@@ -406,17 +405,86 @@ class McapFile:
         checksummed chunk, an index that does not tile the chunk's records exactly with
         message records, a skipped record of a wanted channel. The whole chunk is then read,
         so both routes deliver the same messages.
+
+        When these bytes were not at hand, the pieces of ``following`` (the next chunk to
+        read) are asked for too if its head and index are: they arrive while this one is used.
         """
-        _, length, _, _, size, crc, compression = _CHUNK_HEAD.unpack_from(head)
-        if compression or crc or size > RECORD_SIZE_LIMIT:
-            return None
-        if _U64.unpack_from(head, PLAIN_CHUNK_HEAD - 8)[0] != size or 40 + size > length:
-            return None
         index_at = chunk.offset + chunk.length
-        if index_at + chunk.index_length > self._data_end:
+        if not _plain(head) or index_at + chunk.index_length > self._data_end:
             return None
-        bio.seek(index_at)
-        index = bio.read(chunk.index_length)
+        plan = self._plan(chunk, head, reader.read(index_at, chunk.index_length))
+        if plan is None:
+            return None
+        starts, ends, channels, flags, pieces = plan
+        base = chunk.offset + PLAIN_CHUNK_HEAD
+        first = reader.cached(base + pieces[0][0], pieces[0][1] - pieces[0][0])
+        self._cold = first is None
+        if self._cold and len(pieces) > 1:  # not at hand: all pieces in flight at once
+            for start, stop in pieces:
+                reader.will_need(base + start, stop - start)
+        if self._cold and following is not None:
+            self._plan_ahead(reader, following)
+        timed: list[Timed[Raw]] = []
+        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
+        connections, file_no, pos = self.connections, self.file_no, chunk.offset
+        k, count = 0, len(starts)
+        for start, stop in pieces:
+            if first is not None:
+                data, first = first, None
+            else:
+                data = reader.read(base + start, stop - start)
+            if len(data) != stop - start:
+                return None
+            while k < count and starts[k] < stop:
+                inner, end = starts[k], ends[k]
+                at = inner - start
+                if end <= stop:
+                    op, record_length, cid, _, t_ns = unpack_message(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9:
+                        return None
+                    if flags[k] if cid == channels[k] else self._wants(cid):
+                        payload = data[at + PAYLOAD_AT : at + 9 + record_length]
+                        timed.append(
+                            _new(
+                                Timed,
+                                (
+                                    t_ns,
+                                    (file_no, pos, inner),
+                                    _new(Raw, (connections[cid], payload)),
+                                ),
+                            )
+                        )
+                else:
+                    op, record_length, cid = unpack_head(data, at)
+                    if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
+                        return None
+                k += 1
+        if timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT:
+            return None  # the careful parser skips and reports it
+        return timed
+
+    def _plan_ahead(self, reader: RangeReader, chunk: _ChunkIndex) -> None:
+        """Ask for the pieces of a chunk whose head and index are at hand (a hint only)."""
+        head = reader.cached(chunk.offset, PLAIN_CHUNK_HEAD)
+        index_at = chunk.offset + chunk.length
+        if head is None or len(head) != PLAIN_CHUNK_HEAD or not chunk.index_length:
+            return
+        if index_at + chunk.index_length > self._data_end:
+            return
+        index = reader.cached(index_at, chunk.index_length)
+        plan = self._plan(chunk, head, index) if index is not None else None
+        if plan is not None:
+            base = chunk.offset + PLAIN_CHUNK_HEAD
+            for start, stop in plan[-1]:
+                reader.will_need(base + start, stop - start)
+
+    def _plan(self, chunk: _ChunkIndex, head: bytes, index: bytes) -> _Plan | None:
+        """How to read an uncompressed chunk by its message index (see :meth:`_by_index`):
+        its records' starts, ends, channels and wanted flags, and the pieces to read; None
+        when it cannot or does not pay."""
+        if not _plain(head):
+            return None
+        size = _CHUNK_HEAD.unpack_from(head)[4]
         total = len(index)
         keys: list[int] = []  # offset << 16 | channel id, per message record
         at = 0
@@ -462,51 +530,7 @@ class McapFile:
             at = ends[k]
         if at < size:
             pieces.append((at, size))
-        base = chunk.offset + PLAIN_CHUNK_HEAD
-        first = self._cached(bio, base + pieces[0][0], pieces[0][1] - pieces[0][0])
-        self._cold = first is None
-        if self._cold and len(pieces) > 1:  # from the disk: all pieces in flight at once
-            for start, stop in pieces[1:]:
-                self._hint(bio, base + start, stop - start)
-        timed: list[Timed[Raw]] = []
-        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
-        connections, file_no, pos = self.connections, self.file_no, chunk.offset
-        k, count = 0, len(starts)
-        for start, stop in pieces:
-            if first is not None:
-                data, first = first, None
-            else:
-                bio.seek(base + start)
-                data = bio.read(stop - start)
-            if len(data) != stop - start:
-                return None
-            while k < count and starts[k] < stop:
-                inner, end = starts[k], ends[k]
-                at = inner - start
-                if end <= stop:
-                    op, record_length, cid, _, t_ns = unpack_message(data, at)
-                    if op != OP_MESSAGE or record_length != end - inner - 9:
-                        return None
-                    if flags[k] if cid == channels[k] else self._wants(cid):
-                        payload = data[at + PAYLOAD_AT : at + 9 + record_length]
-                        timed.append(
-                            _new(
-                                Timed,
-                                (
-                                    t_ns,
-                                    (file_no, pos, inner),
-                                    _new(Raw, (connections[cid], payload)),
-                                ),
-                            )
-                        )
-                else:
-                    op, record_length, cid = unpack_head(data, at)
-                    if op != OP_MESSAGE or record_length != end - inner - 9 or self._wants(cid):
-                        return None
-                k += 1
-        if timed and max(map(_T_NS, timed)) >= LOG_TIME_LIMIT:
-            return None  # the careful parser skips and reports it
-        return timed
+        return starts, ends, channels, flags, pieces
 
     def _read_linear(
         self, bio: BinaryIO, cap: int

@@ -5,7 +5,6 @@ The scan of :class:`~medkit_replay.inputs.mcap.McapFile` with a wait where its d
 
 from __future__ import annotations
 
-import os
 from typing import TYPE_CHECKING
 
 from medkit_replay.inputs.mcap import (
@@ -17,6 +16,7 @@ from medkit_replay.inputs.mcap import (
     _Cursor,
     _DamageError,
 )
+from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
 
 if TYPE_CHECKING:
@@ -98,13 +98,13 @@ class McapTail(McapFile):
         without them would say)."""
         while True:
             moved_on = self._done()
-            with self.path.open("rb") as bio:
-                size = os.fstat(bio.fileno()).st_size
-                bio.seek(max(self._data_start, size - len(MAGIC)))
-                if bio.read() == MAGIC or moved_on:
+            with LocalSource(self.path).ranges() as reader:
+                size = reader.size
+                tail_at = max(self._data_start, size - len(MAGIC))
+                if reader.read(tail_at, size - tail_at) == MAGIC or moved_on:
                     self._size = size
                     counted = (dict(self.counts), self.start_ns, self.end_ns)
-                    problem = self._read_footer_and_summary(bio)
+                    problem = self._read_footer_and_summary(reader)
                     for cid in sorted(self.connections):
                         self._wants(cid)  # a channel declared in the summary alone, too
                     if self._chunks is None:  # read without an index, as analyze would

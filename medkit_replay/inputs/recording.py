@@ -1,6 +1,7 @@
 """A recording: several inputs opened together and merged into one time-ordered message stream.
 
-Chooses a reader per input through READERS; the only place inputs are opened and closed.
+Chooses a reader per input through READERS (a URL: inputs.remote); the only place inputs are
+opened and closed.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import merge
+from medkit_replay.inputs.remote import open_remote
+from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
@@ -23,6 +26,7 @@ if TYPE_CHECKING:
     from typing import Self
 
     from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary
@@ -155,12 +159,14 @@ def open_recording(
     only_roles: Iterable[Role] | None = None,
     use_index: bool = True,
     follow: Follow | None = None,
+    tallies: dict[str, Tally] | None = None,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
     Args:
         paths: rosbag2 directories, ``.mcap`` or ``.db3`` files, ROS 1 ``.bag`` files (any kind
-            READERS knows).
+            READERS knows), or ``s3://``, ``gs://``, ``http(s)://`` URLs of a bag folder or
+            storage file.
         rosout: also read ``/rosout`` (for the log bridge).
         diagnostics_topics: topics of type DiagnosticArray to read.
         extra_topics: further topics to read whatever their type (role ``extra``).
@@ -169,6 +175,8 @@ def open_recording(
             every chunk is read whole; the messages are the same).
         follow: read the inputs while they are written, waiting for more as it says
             (:mod:`medkit_replay.inputs.tail`); None: read them as they stand.
+        tallies: bytes fetched for remote inputs are counted here, by URL (give the same
+            dict to several passes over the same inputs to count them all).
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -192,6 +200,10 @@ def open_recording(
     inputs: list[Input] = []
     try:
         for index, raw_path in enumerate(paths):
+            if is_remote(raw_path):
+                context = InputContext(index, selection, sink, use_index=use_index)
+                inputs.append(open_remote(str(raw_path), context, tallies))
+                continue
             path = Path(raw_path)
             if not path.exists():
                 raise InputError("input not found", path=str(path))

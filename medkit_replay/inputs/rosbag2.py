@@ -192,8 +192,29 @@ def open_directory(path: Path, ctx: InputContext) -> Rosbag2Input:
     Raises:
         InputError: no storage file in it can be read at all.
     """
-    meta = _read_metadata(path, ctx.warn)
-    found = _storage_files(path)
+    return open_folder(path, ctx, _read_metadata(path, ctx.warn), _storage_files(path), Path.exists)
+
+
+def open_folder(
+    path: Path,
+    ctx: InputContext,
+    meta: _Metadata | None,
+    found: list[Path],
+    exists: Callable[[Path], bool],
+    bag: Callable[[Path, InputContext, list[Path], _Metadata], Rosbag2Input] | None = None,
+) -> Rosbag2Input:
+    """Open a bag folder from its metadata and listing: local, or a remote prefix's.
+
+    Args:
+        meta: its metadata.yaml (None: missing or unusable).
+        found: its storage files in name order.
+        exists: whether a file named in the metadata is there.
+        bag: builds the input (default :class:`Rosbag2Input`).
+
+    Raises:
+        InputError: no storage file in it can be read at all.
+    """
+    build = bag if bag is not None else Rosbag2Input
     if meta is None:
         if not found:
             raise InputError("no metadata.yaml and no .mcap or .db3 file in it", path=str(path))
@@ -201,18 +222,19 @@ def open_directory(path: Path, ctx: InputContext) -> Rosbag2Input:
         ctx.warn(
             f"{path}: no usable metadata.yaml; reading the storage files in name order: {names}"
         )
-        return Rosbag2Input(path, ctx, found, _Metadata())
+        return build(path, ctx, found, _Metadata())
     listed = [path / name for name in meta.files]
-    for missing in (p for p in listed if not p.exists()):
+    present = {p: exists(p) for p in listed}
+    for missing in (p for p in listed if not present[p]):
         ctx.warn(f"{missing}: listed in metadata.yaml but missing; its messages are lost")
     unlisted = [p for p in found if p not in listed]
     if unlisted:
         names = ", ".join(p.name for p in unlisted)
         ctx.warn(f"{path}: {names} not listed in metadata.yaml; read after the listed files")
-    files = [p for p in listed if p.exists()] + unlisted
+    files = [p for p in listed if present[p]] + unlisted
     if not files:
         raise InputError("metadata.yaml lists no storage file that exists", path=str(path))
-    return Rosbag2Input(path, ctx, files, meta)
+    return build(path, ctx, files, meta)
 
 
 def open_file(path: Path, ctx: InputContext) -> Rosbag2Input:

@@ -85,6 +85,21 @@ def _markup(template: str, **values: object) -> Text:
     return Text.from_markup(template.format(**escaped), emoji=False)
 
 
+def _fetched(fetched: int, size: int) -> Text:
+    """How much of a remote input was fetched."""
+    share = f" ({100 * fetched / size:.1f} %)" if size else ""
+    return _markup(
+        "  [dim]fetched {fetched} of {size}{share}[/dim]",
+        fetched=_megabytes(fetched),
+        size=_megabytes(size),
+        share=share,
+    )
+
+
+def _megabytes(count: int) -> str:
+    return f"{count / 1e6:,.1f} MB" if count >= 100_000 else f"{count:,} bytes"
+
+
 def _plural(count: int, word: str) -> str:
     return f"{count} {word}" + ("" if count == 1 else "s")
 
@@ -149,6 +164,8 @@ def _header(result: Result, clock: _Clock | None, end_ns: int | None) -> list[Re
         lines.append(
             _markup("  [dim]{path} ({storage})[/dim]", path=summary.path, storage=summary.storage)
         )
+        if summary.path in result.fetched:
+            lines.append(_fetched(*result.fetched[summary.path]))
     if len(result.inputs) > 3:
         lines.append(_markup("  [dim]... and {n} more[/dim]", n=len(result.inputs) - 3))
     if clock is None or end_ns is None:

@@ -18,7 +18,7 @@ from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
 from medkit_replay.evidence import EvidenceOptions, collect_evidence
-from medkit_replay.inputs import open_recording
+from medkit_replay.inputs import is_remote, open_recording
 from medkit_replay.inputs.selection import LOG_TYPE
 from medkit_replay.model import (
     CLEAR_ROWS,
@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.model import InputSummary
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.result import Result
@@ -98,7 +99,7 @@ def replay(
     """
     if not inputs:
         raise InputError("no input given")
-    paths = [Path(p) for p in inputs]
+    paths = [p if is_remote(p) else Path(p) for p in inputs]
     configs = tuple(configs)  # read twice when a followed recording is replayed again
     params = load_parameters(Path(c) for c in configs)
     manager_config, warnings = fault_manager_config(params.node("fault_manager"))
@@ -122,6 +123,7 @@ def replay(
     timeline = Timeline(manager)
     router = Router(options)
     tracer = Tracer(trace, timeline, router) if trace is not None else None
+    tallies: dict[str, Tally] = {}  # bytes fetched from remote inputs, both passes
     run = replay_pass(
         paths,
         router,
@@ -133,6 +135,7 @@ def replay(
         progress_every,
         follow=follow,
         tracer=tracer,
+        tallies=tallies,
     )
     gate, messages, summaries = run.gate, run.messages, run.summaries
     warnings += run.warnings
@@ -218,11 +221,13 @@ def replay(
         reports,
         sorted({t.topic for s in summaries for t in s.topics}),
     )
+    fetched = {name: (t.fetched, t.size) for name, t in tallies.items()}
     return dataclasses.replace(
         result,
         snapshots=found.snapshots,
         recordings=found.recordings,
         evidence_notes=found.notes,
+        fetched=fetched,
     )
 
 
@@ -258,7 +263,7 @@ class Pass:
 
 
 def replay_pass(
-    paths: Sequence[Path],
+    paths: Sequence[Path | str],
     router: Router,
     clock: Clock,
     apply: Callable[[Request], object],
@@ -269,6 +274,7 @@ def replay_pass(
     *,
     follow: Follow | None = None,
     tracer: Tracer | None = None,
+    tallies: dict[str, Tally] | None = None,
 ) -> Pass:
     """Read the recording once, in time order, through the router's bridges into the engine.
 
@@ -276,10 +282,10 @@ def replay_pass(
     Timeline (``replay``), or several managers fed the same requests (a sweep's fan-out).
     ``spools`` are settled as the loop goes. With ``follow`` the recording is read while it
     is written (recorded ReportFault codes learnt as they arrive); a ``tracer`` (``explain``)
-    watches the pass.
+    watches the pass. Bytes fetched from remote inputs are counted in ``tallies``.
     """
     recorded_codes = (
-        recorded_report_codes(paths, progress, progress_every) if follow is None else set()
+        recorded_report_codes(paths, progress, progress_every, tallies) if follow is None else set()
     )
     gate = Gate(apply, report_fields, recorded_codes, learn=follow is not None)
     if tracer is not None:
@@ -291,6 +297,7 @@ def replay_pass(
         diagnostics_topics=(router.diagnostic.topic,),
         rosout_topic=rosout_topic,
         follow=follow,
+        tallies=tallies,
     ) as recording:
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from medkit_replay.bridges.action_status import ActionStatusBridge
@@ -22,10 +23,10 @@ from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
-    from pathlib import Path
 
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.config.replay_options import ReplayOptions
+    from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.model import Origin, Progress
 
 Request = ReportRequest | ClearRequest
@@ -71,17 +72,18 @@ class Router:
 
 
 def recorded_report_codes(
-    inputs: Sequence[Path],
+    inputs: Sequence[str | Path],
     progress: Callable[[Progress], None] | None,
     every: int,
+    tallies: dict[str, Tally] | None = None,
 ) -> set[str]:
     """Fault codes present in recorded ReportFault traffic (a pre-pass over those topics only)."""
     services = ServiceCallReplayer()
     codes: set[str] = set()
-    bags = [p for p in inputs if p.suffix != ".jsonl"]
+    bags = [p for p in inputs if Path(p).suffix != ".jsonl"]
     if not bags:
         return codes
-    with open_recording(bags, only_roles=("report_fault",)) as recording:
+    with open_recording(bags, only_roles=("report_fault",), tallies=tallies) as recording:
         meter = Meter(progress, "prescan", recording, every) if progress is not None else None
         next_at = meter.next_at if meter is not None else 0
         messages = 0

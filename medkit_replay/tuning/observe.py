@@ -7,12 +7,11 @@ Both never raise for the input's sake: the outcome's ``error`` says why (one lin
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.files import FileRefusedError, check_regular
-from medkit_replay.fleet.run import describe_error
+from medkit_replay.files import FileRefusedError
+from medkit_replay.fleet.run import describe_error, opened_recording
 from medkit_replay.pipeline import replay
 
 if TYPE_CHECKING:
@@ -58,10 +57,7 @@ class Checked:
 def _replayed(path: str, configs: tuple[str, ...]) -> Result | str:
     """The replay's Result, or why there is none (one line)."""
     try:
-        recording = Path(path)
-        if recording.exists() and not recording.is_dir():
-            check_regular(recording)
-        return replay([recording], list(configs))
+        return replay([opened_recording(path)], list(configs))
     except MedkitReplayError as err:
         return " ".join(err.render().split())
     except FileRefusedError as err:

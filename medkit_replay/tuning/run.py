@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING, Any
 from medkit_replay.config.params import load_parameters
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.files import FileRefusedError, check_regular
-from medkit_replay.fleet.run import MAX_ERROR_CHARS, describe_error
+from medkit_replay.files import FileRefusedError
+from medkit_replay.fleet.run import MAX_ERROR_CHARS, describe_error, opened_recording
 from medkit_replay.model import (
     CLEAR_ROWS,
     EVENT_ROWS,
@@ -136,7 +136,7 @@ def _run_group(
     fan = FanOut([r.manager for r in runs])
     spools = [log for r in runs for log in r.logs[:3]]
     passed = replay_pass(
-        [Path(job.path)], Router(options), fan, fan.apply, fan.report_fields, spools
+        [opened_recording(job.path)], Router(options), fan, fan.apply, fan.report_fields, spools
     )
     fan.finish()
     rows: dict[int, tuple[RunRow, list[CodeRow]]] = {}
@@ -176,9 +176,7 @@ def sweep_job(job: SweepJob) -> SweepPart:
     the replay, is every row's ``error`` (one line).
     """
     try:
-        recording = Path(job.path)
-        if recording.exists() and not recording.is_dir():
-            check_regular(recording)  # a FIFO named like a recording would block its reader
+        opened_recording(job.path)  # refused here once, before any pass
         rows: dict[int, tuple[RunRow, list[CodeRow]]] = {}
         for options, members in _groups(job.configs, job.variants):
             rows.update(_run_group(job, options, members))

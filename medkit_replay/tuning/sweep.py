@@ -67,7 +67,7 @@ def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
 
 
 def plan_jobs(
-    inputs: Sequence[Path],
+    inputs: Sequence[Path | str],
     configs: Sequence[Path],
     variants: Sequence[Variant],
     budget: Budget | None,
@@ -79,7 +79,13 @@ def plan_jobs(
     size = math.ceil(len(variants) / shares)
     absolute = tuple(str(Path(c).absolute()) for c in configs)
     return [
-        SweepJob(str(path.absolute()), str(path), absolute, tuple(variants[at : at + size]), budget)
+        SweepJob(
+            path if isinstance(path, str) else str(path.absolute()),
+            str(path),
+            absolute,
+            tuple(variants[at : at + size]),
+            budget,
+        )
         for path in inputs
         for at in range(0, len(variants), size)
     ]

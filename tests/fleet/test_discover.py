@@ -13,8 +13,8 @@ from tests.fleet.fleet_support import FIXTURES, SAMPLES, build_fleet, report, wr
 from tests.inputs.builders import diag, write_bag
 
 
-def names(paths: list[Path], root: Path) -> list[str]:
-    return [p.relative_to(root).as_posix() for p in paths]
+def names(paths: list[Path | str], root: Path) -> list[str]:
+    return [Path(p).relative_to(root).as_posix() for p in paths]
 
 
 def test_bag_folder_is_one_recording_and_its_storage_files_are_not_counted(
@@ -154,4 +154,4 @@ def test_ros1_bags_are_recordings_also_while_active(tmp_path: Path) -> None:
     (tmp_path / "robot").mkdir()
     for name in ("a.bag", "b.bag.active", "c.active", "d.bag.orig"):
         (tmp_path / "robot" / name).write_bytes(b"")
-    assert [p.name for p in discover([tmp_path])] == ["a.bag", "b.bag.active"]
+    assert [Path(p).name for p in discover([tmp_path])] == ["a.bag", "b.bag.active"]

@@ -1,0 +1,175 @@
+"""Where a storage file's bytes come from: reads at offsets, with hints of what is read next.
+
+The MCAP reader reads through a RangeReader, so a local file (the page cache takes the hints)
+and a remote object (the hints become concurrent range requests) share one reading code.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from contextlib import suppress
+from typing import TYPE_CHECKING, BinaryIO, Protocol
+
+if TYPE_CHECKING:
+    from pathlib import Path
+    from types import TracebackType
+    from typing import Self
+
+_fadvise = getattr(os, "posix_fadvise", None)  # not on every platform
+_WILLNEED = getattr(os, "POSIX_FADV_WILLNEED", 3)
+_NOWAIT = getattr(os, "RWF_NOWAIT", 0)
+_preadv = getattr(os, "preadv", None) if _NOWAIT else None
+
+STREAM_BLOCK = 8 * 1024 * 1024
+"""Bytes one sequential read of a remote object asks for (a file without an index is streamed)."""
+
+
+class RangeReader(Protocol):
+    """Random access to one file's bytes; a context manager that releases what it holds."""
+
+    size: int
+
+    def read(self, offset: int, length: int) -> bytes:
+        """``length`` bytes at ``offset``; fewer only where the file ends."""
+        ...
+
+    def read_into(self, offset: int, view: memoryview) -> int:
+        """Fill ``view`` with the bytes at ``offset``; returns how many (fewer at the end)."""
+        ...
+
+    def cached(self, offset: int, length: int) -> bytes | None:
+        """The bytes if they can be had without waiting, else None (then :meth:`will_need`)."""
+        ...
+
+    def will_need(self, offset: int, length: int) -> None:
+        """A hint: these bytes will be read soon (ranges outside the file are ignored)."""
+        ...
+
+    def __enter__(self) -> Self: ...
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None: ...
+
+
+class ByteSource(Protocol):
+    """A storage file's bytes, opened for random access or for reading from the start."""
+
+    def ranges(self) -> RangeReader:
+        """Open for reads at offsets."""
+        ...
+
+    def stream(self) -> BinaryIO:
+        """Open for sequential reading from the first byte (seekable)."""
+        ...
+
+
+class LocalSource:
+    """A local file: positioned reads, and the kernel's page cache for read-ahead."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def ranges(self) -> LocalRanges:
+        return LocalRanges(self.path)
+
+    def stream(self) -> BinaryIO:
+        return self.path.open("rb")
+
+
+class LocalRanges:
+    """:class:`RangeReader` over an open local file."""
+
+    def __init__(self, path: Path) -> None:
+        self._file = path.open("rb", buffering=0)
+        self._fd = self._file.fileno()
+        try:
+            self.size = os.fstat(self._fd).st_size
+        except BaseException:
+            self._file.close()
+            raise
+
+    def read(self, offset: int, length: int) -> bytes:
+        if length <= 0:
+            return b""
+        data = os.pread(self._fd, length, offset)
+        if len(data) == length or not data:
+            return data
+        buffer = bytearray(length)
+        return bytes(buffer[: self.read_into(offset, memoryview(buffer))])
+
+    def read_into(self, offset: int, view: memoryview) -> int:
+        done = 0
+        while done < len(view):
+            got = os.preadv(self._fd, [view[done:]], offset + done)
+            if not got:
+                break
+            done += got
+        return done
+
+    def cached(self, offset: int, length: int) -> bytes | None:
+        """None also where the system cannot tell (no RWF_NOWAIT): the caller then hints."""
+        if _preadv is None or _fadvise is None:
+            return None
+        buffer = bytearray(length)
+        try:
+            got = _preadv(self._fd, [buffer], offset, _NOWAIT)
+        except OSError:  # BlockingIOError: not cached; others: not supported here
+            return None
+        if got != length and offset + got < self.size:
+            return None  # partly cached: read it as usual
+        return bytes(buffer[:got])
+
+    def will_need(self, offset: int, length: int) -> None:
+        if _fadvise is not None and offset >= 0 and 0 < length <= self.size - offset:
+            with suppress(OSError):
+                _fadvise(self._fd, offset, length, _WILLNEED)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self._file.close()
+
+
+class RangeStream(io.RawIOBase):
+    """A RangeReader read from the start as a file (wrap it in ``io.BufferedReader``)."""
+
+    def __init__(self, reader: RangeReader) -> None:
+        super().__init__()
+        self._reader = reader
+        self._pos = 0
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def tell(self) -> int:
+        return self._pos
+
+    def seek(self, offset: int, whence: int = io.SEEK_SET) -> int:
+        base = {io.SEEK_SET: 0, io.SEEK_CUR: self._pos, io.SEEK_END: self._reader.size}[whence]
+        self._pos = max(0, base + offset)
+        return self._pos
+
+    def readinto(self, buffer: memoryview) -> int:  # type: ignore[override]
+        view = memoryview(buffer).cast("B")
+        got = self._reader.read_into(self._pos, view[: max(0, self._reader.size - self._pos)])
+        self._pos += got
+        return got
+
+    def close(self) -> None:
+        if not self.closed:
+            self._reader.__exit__(None, None, None)
+        super().close()

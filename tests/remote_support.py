@@ -1,0 +1,195 @@
+"""Servers on 127.0.0.1 for the remote-input tests: an HTTP file server with Range support and
+moto's S3 server; real sockets and real range requests, nothing patched in the client.
+
+The HTTP server can also refuse a path (403), cut a response short once (a dropped
+connection) and count what it served, so tests can check what the reader fetched.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import threading
+import time
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import TYPE_CHECKING, Any, ClassVar
+from urllib.parse import unquote, urlsplit
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+    from pathlib import Path
+
+    import pytest
+
+_RANGE = re.compile(r"bytes=(\d+)-(\d*)$")
+
+
+@dataclass
+class Served:
+    """What a RangeServer did: requests, bytes sent, and the faults it is told to inject."""
+
+    requests: int = 0
+    body_bytes: int = 0
+    forbidden: set[str] = field(default_factory=set)
+    drop_next: int = 0  # this many next GETs send half their body and close the connection
+    delay_s: float = 0.0  # wait before each GET's body (a slow link)
+    seen: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # method, headers
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+class _Handler(BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.1"  # keep-alive, as real servers
+    disable_nagle_algorithm = True  # headers and body go out as separate writes
+    root: ClassVar[Path]
+    served: ClassVar[Served]
+
+    def log_message(self, format: str, *args: object) -> None:
+        """Silent: the tests read what they need from ``served``."""
+
+    def _target(self) -> Path | None:
+        relative = unquote(urlsplit(self.path).path).lstrip("/")
+        target = (self.root / relative).resolve()
+        if self.root.resolve() not in (target, *target.parents):
+            return None
+        return target
+
+    def _refuse(self, status: int) -> None:
+        body = b"refused\n"
+        self.send_response(status)
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(body)
+
+    def do_HEAD(self) -> None:
+        self._serve(body=False)
+
+    def do_GET(self) -> None:
+        self._serve(body=True)
+
+    def _serve(self, *, body: bool) -> None:
+        with self.served.lock:
+            self.served.requests += 1
+            self.served.seen.append((self.command, dict(self.headers.items())))
+        relative = unquote(urlsplit(self.path).path).lstrip("/")
+        if relative in self.served.forbidden:
+            self._refuse(403)
+            return
+        target = self._target()
+        if target is None or not target.is_file():
+            self._refuse(404)
+            return
+        size = target.stat().st_size
+        start, end = 0, size - 1
+        wanted = self.headers.get("Range")
+        status = 200
+        if wanted:
+            match = _RANGE.match(wanted.strip())
+            if match is None or int(match[1]) >= size:
+                self.send_response(416)
+                self.send_header("Content-Range", f"bytes */{size}")
+                self.send_header("Content-Length", "0")
+                self.end_headers()
+                return
+            start = int(match[1])
+            end = min(size - 1, int(match[2])) if match[2] else size - 1
+            status = 206
+        length = end - start + 1 if size else 0
+        self.send_response(status)
+        self.send_header("Content-Length", str(length))
+        self.send_header("Accept-Ranges", "bytes")
+        self.send_header("Last-Modified", self.date_time_string(int(target.stat().st_mtime)))
+        self.send_header("ETag", f'"{size:x}-{int(target.stat().st_mtime)}"')
+        if status == 206:
+            self.send_header("Content-Range", f"bytes {start}-{end}/{size}")
+        self.end_headers()
+        if not body or not length:
+            return
+        if self.served.delay_s:
+            time.sleep(self.served.delay_s)
+        with target.open("rb") as stream:
+            data = os.pread(stream.fileno(), length, start)
+        with self.served.lock:
+            drop = self.served.drop_next > 0 and length > 1
+            if drop:
+                self.served.drop_next -= 1
+        if drop:  # half the body, then the connection goes away
+            self.wfile.write(data[: length // 2])
+            self.wfile.flush()
+            self.close_connection = True
+            self.connection.shutdown(2)
+            return
+        self.wfile.write(data)
+        with self.served.lock:
+            self.served.body_bytes += len(data)
+
+
+@contextmanager
+def range_server(root: Path) -> Iterator[tuple[str, Served]]:
+    """An HTTP server on 127.0.0.1 serving the files under ``root``; yields (base URL, Served)."""
+    served = Served()
+    handler = type("Handler", (_Handler,), {"root": root, "served": served})
+    server = ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server.daemon_threads = True
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}", served
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join()
+
+
+SECRET = "medkit-test-secret-9f3c2a"  # the secret key the S3 client signs with
+KEY_ID = "medkit-test-key-id-41d7"
+
+
+@contextmanager
+def s3_server() -> Iterator[str]:
+    """moto's S3 server on 127.0.0.1 (real HTTP, real range requests); yields its endpoint."""
+    from moto.server import ThreadedMotoServer  # noqa: PLC0415  # a test dependency
+
+    server = ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
+    server.start()
+    host, port = server.get_host_and_port()
+    try:
+        yield f"http://{host}:{port}"
+    finally:
+        server.stop()
+
+
+def aws_environment(monkeypatch: pytest.MonkeyPatch, endpoint: str, home: Path) -> str:
+    """The environment a user sets for MinIO, nothing else of AWS's; returns a new bucket."""
+    for name in list(os.environ):
+        if name.startswith("AWS_"):
+            monkeypatch.delenv(name)
+    monkeypatch.setenv("AWS_ACCESS_KEY_ID", KEY_ID)
+    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", SECRET)
+    monkeypatch.setenv("AWS_REGION", "us-east-1")
+    monkeypatch.setenv("AWS_ENDPOINT_URL", endpoint)
+    monkeypatch.setenv("AWS_CONFIG_FILE", str(home / "no-aws-config"))
+    monkeypatch.setenv("AWS_SHARED_CREDENTIALS_FILE", str(home / "no-aws-credentials"))
+    bucket = f"bags-{uuid.uuid4().hex[:12]}"
+    s3_client().create_bucket(Bucket=bucket)
+    return bucket
+
+
+def s3_client() -> Any:  # boto3 ships no type information
+    import boto3  # noqa: PLC0415  # a test dependency
+
+    return boto3.client("s3", endpoint_url=os.environ["AWS_ENDPOINT_URL"])
+
+
+def upload(bucket: str, local: Path, key: str) -> None:
+    """A file to ``key``, or a folder's files (not its subfolders) under ``key/``."""
+    client = s3_client()
+    if local.is_dir():
+        for path in sorted(local.iterdir()):
+            if path.is_file():
+                client.upload_file(str(path), bucket, f"{key}/{path.name}")
+    else:
+        client.upload_file(str(local), bucket, key)
