@@ -8,9 +8,19 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import stat
 from pathlib import Path
 from typing import IO
+
+_REMOTE = re.compile(r"(?i)(s3|gs|https?)://")
+
+
+def is_remote(text: str | os.PathLike[str]) -> bool:
+    """Whether an input names a remote object: ``s3://``, ``gs://``, ``http(s)://`` (a URL is
+    kept as a string; a Path would fold its ``//``)."""
+    return isinstance(text, str) and _REMOTE.match(text) is not None
+
 
 # A parameter file, correlation file, budget or metadata.yaml is a few KB; a report of a
 # long mission a few hundred MB. Anything past these is not what the user meant to give.

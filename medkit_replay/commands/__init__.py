@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.inputs import is_remote
+from medkit_replay.files import is_remote
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable

@@ -20,9 +20,9 @@ followed with ``open_recording(..., follow=Follow())``: its files are read as th
         summaries = recording.inputs
 """
 
+from medkit_replay.files import is_remote
 from medkit_replay.inputs.follow import Follow
 from medkit_replay.inputs.recording import READERS, Recording, input_kind, open_recording
-from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.selection import Role, Selection
 from medkit_replay.inputs.source import Input, InputContext, Message, Opener
 from medkit_replay.msgdefs import normalize_typename

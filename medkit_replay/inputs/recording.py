@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
+from medkit_replay.files import is_remote
 from medkit_replay.inputs.merge import merge
 from medkit_replay.inputs.remote import open_remote
-from medkit_replay.inputs.remote_store import is_remote
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection

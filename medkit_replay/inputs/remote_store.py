@@ -22,18 +22,12 @@ if TYPE_CHECKING:
     from obstore.store import ClientConfig, RetryConfig, S3CredentialProvider
 
 SCHEMES = ("s3", "gs", "http", "https")
-_REMOTE = re.compile(r"(?i)(s3|gs|https?)://")
 EXTRA_HINT = "pip install 'medkit-replay[remote]'"
 ATTEMPTS = 5
 """Tries of one range request: a dropped connection or a short body is asked for again."""
 BACKOFF_S = 0.1
 """Wait before the second try; doubled before each further one."""
 _STATUS = re.compile(r"status code: (\d{3})|\b(\d{3}) (?:Forbidden|Not Found|Unauthorized)")
-
-
-def is_remote(text: str | os.PathLike[str]) -> bool:
-    """Whether an input names a remote object: ``s3://``, ``gs://``, ``http(s)://``."""
-    return isinstance(text, str) and _REMOTE.match(text) is not None
 
 
 class RemoteError(InputError):
