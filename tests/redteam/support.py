@@ -7,17 +7,17 @@ file size), never by hoping: a bound that does not hold kills the child and fail
 from __future__ import annotations
 
 import os
-import resource
+import shutil
+import signal
 import subprocess
 import sys
 import tempfile
-import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
-    from pathlib import Path
 
 MIB = 1024 * 1024
 # Python, rosbags, numpy and pandas need some 300-400 MiB of address space to start;
@@ -40,11 +40,30 @@ class Outcome:
         return [line for line in self.stderr.splitlines() if line.startswith("medkit-replay:")]
 
 
-def _limits(memory: int, cpu_seconds: int, file_size: int | None) -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-    resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds))
-    if file_size is not None:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (file_size, file_size))
+_LAUNCHER = """
+import os, resource, signal, sys
+peak_file = sys.argv[1]
+memory, cpu, size = (int(v) for v in sys.argv[2:5])
+resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu))
+if size >= 0:
+    resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+child = os.fork()
+if child == 0:
+    os.execv(sys.executable, [sys.executable, *sys.argv[5:]])
+_, raw, usage = os.wait4(child, 0)
+with open(peak_file, "w") as out:
+    out.write(str(usage.ru_maxrss))
+if os.WIFSIGNALED(raw):
+    signal.signal(os.WTERMSIG(raw), signal.SIG_DFL)
+    os.kill(os.getpid(), os.WTERMSIG(raw))
+sys.exit(os.waitstatus_to_exitcode(raw))
+"""
+"""Sets the limits (peak file, address space, CPU seconds, file size or -1), runs the rest of
+its arguments as a fresh interpreter in a child, writes that child's peak RSS (KiB) to the peak
+file and ends as the child ended. A peak taken from a process this test process started would
+count this process's own pages (Linux keeps the high-water mark across fork and exec); the
+launcher is small when it forks."""
 
 
 def run_limited(
@@ -62,16 +81,31 @@ def run_limited(
     child_env.update(env or {})
     child_env.setdefault("COLUMNS", "100")
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        peak_file = Path(tempfile.mkdtemp()) / "peak"
+        limits = [str(memory), str(cpu_seconds), str(file_size if file_size is not None else -1)]
         proc = subprocess.Popen(
-            [sys.executable, "-m", "medkit_replay.cli", *map(str, argv)],
+            [
+                sys.executable,
+                "-c",
+                _LAUNCHER,
+                str(peak_file),
+                *limits,
+                "-m",
+                "medkit_replay.cli",
+                *map(str, argv),
+            ],
             stdout=out,
             stderr=err,
             stdin=subprocess.DEVNULL,
             cwd=cwd,
             env=child_env,
-            preexec_fn=lambda: _limits(memory, cpu_seconds, file_size),  # noqa: PLW1509
+            start_new_session=True,  # a timeout ends the launcher and the CLI together
         )
-        status, peak = _wait(proc, timeout)
+        try:
+            status = _wait(proc, timeout)
+            peak = int(peak_file.read_text())
+        finally:
+            shutil.rmtree(peak_file.parent, ignore_errors=True)
         out.seek(0)
         err.seek(0)
         stdout = out.read().decode("utf-8", "replace")
@@ -79,19 +113,14 @@ def run_limited(
     return Outcome(status, stdout, stderr, peak)
 
 
-def _wait(proc: subprocess.Popen[bytes], timeout: float) -> tuple[int, int]:
-    """Wait for this one child and take its own peak RSS (KiB) from wait4's rusage."""
-    deadline = time.monotonic() + timeout
-    while True:
-        pid, raw, usage = os.wait4(proc.pid, os.WNOHANG)
-        if pid == proc.pid:
-            proc.returncode = os.waitstatus_to_exitcode(raw)
-            return proc.returncode, usage.ru_maxrss
-        if time.monotonic() > deadline:
-            proc.kill()
-            proc.wait()
-            raise subprocess.TimeoutExpired(proc.args, timeout)
-        time.sleep(0.02)
+def _wait(proc: subprocess.Popen[bytes], timeout: float) -> int:
+    """Wait for the launcher; its status is the CLI's."""
+    try:
+        return proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
 
 
 def assert_one_line_error(outcome: Outcome, *needles: str) -> str:
