@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.evidence.clips import evidence_recording
 from medkit_replay.evidence.frames import freeze_frames
 from medkit_replay.evidence.graph import NodeGraph, load_graph
 from medkit_replay.evidence.plan import plan_evidence
@@ -130,6 +129,9 @@ def _gather(
             raise MedkitReplayError(
                 f"cannot create the evidence folder: {err.strerror or err}", path=str(directory)
             ) from None
+    if plan.recordings:
+        # rosbags' writers load only for a replay that plans recordings.
+        from medkit_replay.evidence.clips import evidence_recording  # noqa: PLC0415
     for recording in plan.recordings:
         write = directory is not None and (recording.deleted is None or options.everything)
         target = directory / recording.name if write and directory is not None else None

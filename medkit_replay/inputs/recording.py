@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING
 from medkit_replay.errors import InputError
 from medkit_replay.files import is_remote
 from medkit_replay.inputs.merge import merge
-from medkit_replay.inputs.remote import open_remote
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
@@ -202,6 +201,9 @@ def open_recording(
         for index, raw_path in enumerate(paths):
             if is_remote(raw_path):
                 context = InputContext(index, selection, sink, use_index=use_index)
+                # The remote reader (threads, the optional store client) loads with a URL only.
+                from medkit_replay.inputs.remote import open_remote  # noqa: PLC0415
+
                 inputs.append(open_remote(str(raw_path), context, tallies))
                 continue
             path = Path(raw_path)
