@@ -5,6 +5,7 @@ Each module defines one click command; ``medkit_replay.cli`` registers it on the
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -49,3 +50,50 @@ def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:
     return click.option(
         "--config", "configs", multiple=True, type=click.Path(path_type=Path), help=help_text
     )
+
+
+MAX_TIMEOUT = 10**9
+"""Seconds: a longer --timeout is refused (some 30 years)."""
+
+
+def _timeout_seconds(
+    _ctx: click.Context, _param: click.Parameter, value: float | None
+) -> float | None:
+    if value is not None and not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT):
+        raise click.BadParameter(f"must be a number of seconds above 0, at most {MAX_TIMEOUT}")
+    return value
+
+
+def executor_options(timeout_help: str) -> Callable[[FC], FC]:
+    """``--jobs``, ``--dask`` and ``--timeout``: where a command running many replays runs them
+    (``fleet``, ``sweep``); ``timeout_help`` says what one timed-out unit of work is."""
+    options = (
+        click.option(
+            "--jobs",
+            type=click.IntRange(min=1),
+            default=None,
+            help="Worker processes (default: one per CPU; 1 runs in this process).",
+        ),
+        click.option(
+            "--dask",
+            "dask_address",
+            type=str,
+            default=None,
+            help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
+        ),
+        click.option(
+            "--timeout",
+            type=float,
+            default=None,
+            callback=_timeout_seconds,
+            metavar="SECONDS",
+            help=timeout_help,
+        ),
+    )
+
+    def decorate(command: FC) -> FC:
+        for option in reversed(options):
+            command = option(command)
+        return command
+
+    return decorate

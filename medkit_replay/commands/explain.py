@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.model import NS_PER_SEC
@@ -34,7 +34,7 @@ def _at_offset_ns(at: float | None) -> int | None:
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @click.argument("code", type=str)
 @config_option()
 @click.option(
@@ -57,7 +57,7 @@ def _at_offset_ns(at: float | None) -> int | None:
 @click.option("--json", "as_json", is_flag=True, help="Write the story as JSON records.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def explain(
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     code: str,
     configs: tuple[Path, ...],
     at: float | None,

@@ -8,28 +8,22 @@ writes the report (:mod:`medkit_replay.fleet.report`) and the summary
 
 from __future__ import annotations
 
-import math
 import sys
 from contextlib import nullcontext
 from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import (
+    config_option,
+    executor_options,
+    input_argument,
+    local_paths,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 
 DEFAULT_OUT = Path("fleet-report")
-MAX_TIMEOUT = 10**9
-"""Seconds: a longer --timeout is refused (some 30 years)."""
-
-
-def timeout_seconds(
-    _ctx: click.Context, _param: click.Parameter, value: float | None
-) -> float | None:
-    if value is not None and not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT):
-        raise click.BadParameter(f"must be a number of seconds above 0, at most {MAX_TIMEOUT}")
-    return value
 
 
 @click.command()
@@ -43,26 +37,8 @@ def timeout_seconds(
     default=None,
     help="Fault budget YAML checked on every run (the budget column).",
 )
-@click.option(
-    "--jobs",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Worker processes (default: one per CPU; 1 runs in this process).",
-)
-@click.option(
-    "--dask",
-    "dask_address",
-    type=str,
-    default=None,
-    help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
-)
-@click.option(
-    "--timeout",
-    type=float,
-    default=None,
-    callback=timeout_seconds,
-    metavar="SECONDS",
-    help="Kill a run that takes longer and report it as failed (runs in worker processes).",
+@executor_options(
+    "Kill a run that takes longer and report it as failed (runs in worker processes)."
 )
 @click.option(
     "--out",

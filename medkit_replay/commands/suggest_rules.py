@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option
+from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import echo
@@ -36,7 +36,7 @@ MAX_LISTED = 20
 
 
 @click.command("suggest-rules")
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @config_option("ROS 2 parameter file every input is replayed with (repeatable).")
 @click.option(
     "--window-ms",
@@ -78,7 +78,7 @@ MAX_LISTED = 20
     help="Worker processes (default: one per CPU; 1 runs in this process).",
 )
 def suggest_rules(
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     window_ms: int,
     min_support: int,
@@ -108,7 +108,7 @@ def suggest_rules(
     from medkit_replay.tuning.rules_file import rules_yaml  # noqa: PLC0415
 
     config_paths = config_files(configs)
-    refuse_overlap([*inputs, *config_paths], [("--out", out_path)] if out_path else [])
+    refuse_overlap([*local_paths(inputs), *config_paths], [("--out", out_path)] if out_path else [])
     recordings = discover(inputs)
     if not recordings:
         raise InputError(

@@ -13,15 +13,14 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option
-from medkit_replay.commands.fleet import timeout_seconds
+from medkit_replay.commands import config_option, executor_options, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import warn
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@input_argument("inputs")
 @config_option("ROS 2 parameter file under every variant (repeatable; later files override).")
 @click.option(
     "--vary",
@@ -37,27 +36,7 @@ from medkit_replay.outputs.console import warn
     default=None,
     help="Fault budget YAML checked on every variant x input (the budget columns).",
 )
-@click.option(
-    "--jobs",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Worker processes (default: one per CPU; 1 runs in this process).",
-)
-@click.option(
-    "--dask",
-    "dask_address",
-    type=str,
-    default=None,
-    help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
-)
-@click.option(
-    "--timeout",
-    type=float,
-    default=None,
-    callback=timeout_seconds,
-    metavar="SECONDS",
-    help="Kill a job (one input, a share of the grid) that takes longer; its rows say so.",
-)
+@executor_options("Kill a job (one input, a share of the grid) that takes longer; its rows say so.")
 @click.option(
     "--out",
     "out_dir",
@@ -75,7 +54,7 @@ from medkit_replay.outputs.console import warn
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
 def sweep(
-    inputs: tuple[Path, ...],
+    inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     varies: tuple[str, ...],
     budget: Path | None,
@@ -134,7 +113,7 @@ def sweep(
         for s in v.settings
         if s.name.endswith("config_file") and s.value
     ]
-    protected = [*inputs, *config_paths, *varied_files, *([budget] if budget else [])]
+    protected = [*local_paths(inputs), *config_paths, *varied_files, *([budget] if budget else [])]
     outputs = [("--html", html_path)] if html_path is not None else []
     if out_dir is not None:
         outputs += [("--out", out_dir), ("--out", out_dir / VARIANTS_FOLDER)]

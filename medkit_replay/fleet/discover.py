@@ -157,6 +157,14 @@ def _walk_remote(url: str) -> list[str]:
     ]
 
 
+def _remote_roots(url: str) -> list[str]:
+    """A URL naming a storage file is that recording, as a local file is; a prefix is walked
+    (a bucket's; an HTTP server cannot be listed)."""
+    if PurePosixPath(url.rstrip("/")).suffix.lower() in FILE_KINDS:
+        return [url]
+    return _walk_remote(url)
+
+
 def discover(roots: Iterable[str | Path]) -> list[Path | str]:
     """Every recording under the given folders, each once, in a deterministic order.
 
@@ -169,7 +177,7 @@ def discover(roots: Iterable[str | Path]) -> list[Path | str]:
     seen: set[Path | str] = set()
     for raw in roots:
         if is_remote(raw):
-            for url in _walk_remote(str(raw)):
+            for url in _remote_roots(str(raw)):
                 if url not in seen:
                     seen.add(url)
                     recordings.append(url)

@@ -411,3 +411,29 @@ def test_urls_with_secrets_or_without_a_bucket_are_refused_without_showing_them(
     with pytest.raises(InputError) as caught:
         parse_location(url)
     assert SECRET not in str(caught.value)
+
+
+def test_sweep_suggest_rules_and_explain_take_urls(tmp_path: Path) -> None:
+    """The tuning commands and explain read a URL as analyze does: same rows, same story."""
+    local = _bare_copy()  # an HTTP server cannot be listed: a file's own URL
+    vary = ["--vary", "fault_manager.confirmation_threshold=-1,-2", "--jobs", "1", "--quiet"]
+    explain = ["MOTOR_LEFT_OVERHEAT", *_configs(), "--json", "--quiet"]
+    here, there = tmp_path / "local", tmp_path / "remote"
+    assert cli("sweep", str(local), *_configs(), *vary, "--out", str(here)).returncode == 0
+    local_story = cli("explain", str(local), *explain)
+    with range_server(SAMPLES) as (base, _served):
+        url = f"{base}/nav2_mission_mcap/nav2_mission_mcap.mcap"
+        sweep = cli("sweep", url, *_configs(), *vary, "--out", str(there))
+        story = cli("explain", url, *explain)
+        suggest = cli("suggest-rules", url, *_configs(), "--min-support", "1")
+    assert sweep.returncode == 0, sweep.stderr
+    for table in ("variants.csv", "codes.csv"):
+        assert (there / table).read_text() == (here / table).read_text()
+    runs = (there / "runs.csv").read_text()
+    assert url in runs
+    assert runs.replace(url, str(local)) == (here / "runs.csv").read_text()
+    assert story.returncode == 0, story.stderr
+    remote_entries = json.loads(story.stdout)["entries"]
+    assert remote_entries == json.loads(local_story.stdout)["entries"]
+    assert suggest.returncode == 0, suggest.stderr
+    assert "Learned from 1 run(s)" in suggest.stdout
