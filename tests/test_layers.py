@@ -282,7 +282,7 @@ def test_the_diff_itself_draws_nothing(module: str) -> None:
 PURE_INPUT_MODULES = {
     # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; rosbag1.py reads.
     "rosbag1_records.py": set(),
-    "ros1_messages.py": {"medkit_replay.msgdefs"},
+    "ros1_messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
     "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""

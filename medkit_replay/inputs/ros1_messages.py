@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, NamedTuple, Protocol, cast
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
+from medkit_replay.inputs.selection import ACTION_STATUS_SUFFIX
 from medkit_replay.msgdefs import base_typestore
 
 if TYPE_CHECKING:
@@ -26,7 +27,6 @@ ROS1_LOG = "rosgraph_msgs/msg/Log"
 """ROS 1 type names as normalised (``pkg/msg/Name``); a ROS 1 bag spells them ``pkg/Name``."""
 
 ROS1_STATUS_SUFFIX = "/status"
-ROS2_STATUS_SUFFIX = "/_action/status"
 
 GOAL_STATUS_TO_ROS2: dict[int, int] = {
     0: 1,  # PENDING -> ACCEPTED: accepted, not yet executing
@@ -74,7 +74,7 @@ def status_topic(ros1_topic: str) -> str:
     Any other name is returned as it is (the selection then does not take it as a status).
     """
     if ros1_topic.endswith(ROS1_STATUS_SUFFIX):
-        return ros1_topic[: -len(ROS1_STATUS_SUFFIX)] + ROS2_STATUS_SUFFIX
+        return ros1_topic[: -len(ROS1_STATUS_SUFFIX)] + ACTION_STATUS_SUFFIX
     return ros1_topic
 
 

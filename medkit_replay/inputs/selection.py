@@ -25,10 +25,11 @@ REPORT_FAULT_EVENT_TYPE = "ros2_medkit_msgs/srv/ReportFault_Event"
 CLEAR_FAULT_EVENT_TYPE = "ros2_medkit_msgs/srv/ClearFault_Event"
 FAULT_EVENT_TYPE = "ros2_medkit_msgs/msg/FaultEvent"
 LOG_TYPE = "rcl_interfaces/msg/Log"
+ACTION_STATUS_SUFFIX = "/_action/status"
 
 # Topic suffixes of the roles read on every namespace: (suffix, role, expected type).
 _SUFFIX_ROLES: tuple[tuple[str, Role, str], ...] = (
-    ("/_action/status", "action_status", ACTION_STATUS_TYPE),
+    (ACTION_STATUS_SUFFIX, "action_status", ACTION_STATUS_TYPE),
     ("/report_fault/_service_event", "report_fault", REPORT_FAULT_EVENT_TYPE),
     ("/clear_fault/_service_event", "clear_fault", CLEAR_FAULT_EVENT_TYPE),
     ("/fault_manager/events", "fault_events", FAULT_EVENT_TYPE),
