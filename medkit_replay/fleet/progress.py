@@ -17,6 +17,8 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from medkit_replay.outputs.console import bar_terminal
+
 if TYPE_CHECKING:
     from types import TracebackType
     from typing import Self
@@ -73,12 +75,4 @@ class FleetProgress:
 
 def fleet_progress(stream: TextIO, total: int, *, quiet: bool = False) -> FleetProgress | None:
     """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal."""
-    if quiet:
-        return None
-    isatty = getattr(stream, "isatty", None)
-    if isatty is None or not isatty():
-        return None
-    console = Console(file=stream)
-    if not console.is_terminal or console.is_dumb_terminal:
-        return None
-    return FleetProgress(stream, total)
+    return FleetProgress(stream, total) if bar_terminal(stream, quiet=quiet) else None

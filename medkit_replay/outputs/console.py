@@ -48,6 +48,20 @@ def literal_console(
     return console
 
 
+def bar_terminal(stream: TextIO, *, quiet: bool = False) -> bool:
+    """Whether a progress bar may be drawn on ``stream``: not ``quiet``, and a terminal that is
+    not dumb (a bar in a pipe or a log file would only be noise)."""
+    if quiet:
+        return False
+    isatty = getattr(stream, "isatty", None)
+    if isatty is None or not isatty():
+        return False
+    from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn
+
+    console = Console(file=stream)
+    return console.is_terminal and not console.is_dumb_terminal
+
+
 def plain_text(renderable: RenderableType, width: int, *, crop: bool = True) -> str:
     """``renderable`` as plain text (no ANSI codes) laid out for ``width`` columns."""
     from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn

@@ -22,6 +22,8 @@ from rich.progress import (
 )
 from rich.text import Text
 
+from medkit_replay.outputs.console import bar_terminal
+
 if TYPE_CHECKING:
     from types import TracebackType
     from typing import Self
@@ -140,12 +142,4 @@ class _Pass:
 
 def progress_bar(stream: TextIO, *, quiet: bool = False) -> ProgressBar | None:
     """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal."""
-    if quiet:
-        return None
-    isatty = getattr(stream, "isatty", None)
-    if isatty is None or not isatty():
-        return None
-    console = Console(file=stream)
-    if not console.is_terminal or console.is_dumb_terminal:
-        return None
-    return ProgressBar(stream)
+    return ProgressBar(stream) if bar_terminal(stream, quiet=quiet) else None
