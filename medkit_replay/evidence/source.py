@@ -15,7 +15,9 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 
 from medkit_replay.files import open_regular
+from medkit_replay.inputs.db3 import connect_read_only
 from medkit_replay.inputs.decompress import MAX_RATIO, RATIO_SLACK
+from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT
 from medkit_replay.msgdefs import Definition, normalize_typename
 
 if TYPE_CHECKING:
@@ -121,8 +123,9 @@ class _Db3File(_File):
         if wal.exists() and wal.stat().st_size > 0:
             raise ValueError("in WAL mode (frames not checkpointed)")
         self.path = path
-        uri = path.resolve().as_uri() + "?mode=ro&immutable=1"
-        self.db = sqlite3.connect(uri, uri=True, check_same_thread=False)
+        # As the replay opens it: immutable, and no row's blob past the message bound (a hostile
+        # row inside a clip's window stops the file's evidence, noted, instead of being held).
+        self.db = connect_read_only(path.resolve(), immutable=True, limit=MESSAGE_SIZE_LIMIT)
         self.ids: dict[str, int] = {}
         self.topics = {}
         try:

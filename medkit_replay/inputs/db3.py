@@ -141,7 +141,9 @@ def checkpointed_copy(
     return folder, copy
 
 
-def _connect(path: Path, *, immutable: bool, limit: int) -> sqlite3.Connection:
+def connect_read_only(path: Path, *, immutable: bool, limit: int) -> sqlite3.Connection:
+    """An sqlite3 bag opened read-only (``immutable``: no lock, nothing written beside it), no
+    string or blob longer than ``limit`` ever built."""
     flags = "mode=ro&immutable=1" if immutable else "mode=ro"
     connection = sqlite3.connect(f"{path.absolute().as_uri()}?{flags}", uri=True)
     # SQLite refuses to build a longer string or blob (a huge row, a generated column).
@@ -206,7 +208,9 @@ class Db3File:
         if copied is not None:
             self._copy, self._source = copied
         try:
-            with closing(_connect(self._source, immutable=True, limit=SCHEMA_VALUE_LIMIT)) as db:
+            with closing(
+                connect_read_only(self._source, immutable=True, limit=SCHEMA_VALUE_LIMIT)
+            ) as db:
                 self._probe(db)
         except sqlite3.Error as exc:
             self.close()
@@ -313,7 +317,9 @@ class Db3File:
             return
         losses = {"data": _Losses(), "large": _Losses()}
         try:
-            with closing(_connect(self._source, immutable=True, limit=MESSAGE_SIZE_LIMIT)) as db:
+            with closing(
+                connect_read_only(self._source, immutable=True, limit=MESSAGE_SIZE_LIMIT)
+            ) as db:
                 yield from self._messages(db, sorted(wanted), cap_ns, losses)
                 self._report_bad_times(db, wanted)
         except sqlite3.Error as exc:

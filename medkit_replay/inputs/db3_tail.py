@@ -18,8 +18,8 @@ from medkit_replay.inputs.db3 import (
     SCHEMA_VALUE_LIMIT,
     SQLITE_MAGIC,
     Db3File,
-    _connect,
     _Losses,
+    connect_read_only,
 )
 from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.merge import Bound, Timed
@@ -100,7 +100,9 @@ class Db3Tail(Db3File):
                 fresh = self._snapshot(mirror, done)
                 if fresh is not None:
                     source = fresh
-                    with closing(_connect(source, immutable=True, limit=MESSAGE_SIZE_LIMIT)) as db:
+                    with closing(
+                        connect_read_only(source, immutable=True, limit=MESSAGE_SIZE_LIMIT)
+                    ) as db:
                         self._new_topics(db, wants, wanted, classified)
                         batch, last_id = self._new_rows(db, wanted, last_id, losses)
                     if batch:
@@ -216,7 +218,9 @@ class Db3Tail(Db3File):
             )
         if source is not None:
             try:
-                with closing(_connect(source, immutable=True, limit=SCHEMA_VALUE_LIMIT)) as db:
+                with closing(
+                    connect_read_only(source, immutable=True, limit=SCHEMA_VALUE_LIMIT)
+                ) as db:
                     self._probe(db)
                     self._report_bad_times(db, wanted)
             except (sqlite3.Error, NotABagError) as exc:
