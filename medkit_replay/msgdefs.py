@@ -23,6 +23,7 @@ BASE_STORE = Stores.ROS2_JAZZY
 """rosbags' store for types a recording does not define (has service_msgs, action_msgs...)."""
 
 MEDKIT_PACKAGE = "ros2_medkit_msgs"
+REFERENCE_PACKAGES = ("builtin_interfaces", "std_msgs", "diagnostic_msgs")
 _HEADER = re.compile(r"^(MSG|SRV|IDL|ACTION):\s*(\S+)\s*$")
 _RULE = re.compile(r"^=+\s*$")
 _SERVICE_SUFFIXES = ("_Event", "_Request", "_Response")
@@ -153,22 +154,39 @@ def normalize_typename(name: str) -> str:
     return name
 
 
-@cache
-def bundled_types() -> Typesdict:
-    """The ros2_medkit_msgs types bundled in ``interfaces/``, services as Request/Response/Event."""
+def _package_types(package: str) -> Typesdict:
+    """The types of one package bundled in ``inputs/interfaces/`` (services as
+    Request/Response/Event)."""
     # Package data of the inputs, reached from the top package so the inputs are not imported.
     interfaces = resources.files("medkit_replay").joinpath("inputs").joinpath("interfaces")
-    root = interfaces.joinpath(MEDKIT_PACKAGE)
+    root = interfaces.joinpath(package)
     types: Typesdict = {}
     for entry in sorted(root.joinpath("msg").iterdir(), key=lambda e: e.name):
         if entry.name.endswith(".msg"):
-            name = f"{MEDKIT_PACKAGE}/msg/{entry.name.removesuffix('.msg')}"
+            name = f"{package}/msg/{entry.name.removesuffix('.msg')}"
             types.update(get_types_from_msg(entry.read_text(encoding="utf-8"), name))
-    for entry in sorted(root.joinpath("srv").iterdir(), key=lambda e: e.name):
+    srv = root.joinpath("srv")
+    for entry in sorted(srv.iterdir() if srv.is_dir() else (), key=lambda e: e.name):
         if entry.name.endswith(".srv"):
-            base = f"{MEDKIT_PACKAGE}/srv/{entry.name.removesuffix('.srv')}"
+            base = f"{package}/srv/{entry.name.removesuffix('.srv')}"
             types.update(_service_types(base, entry.read_text(encoding="utf-8")))
     return _fix_names(types)
+
+
+@cache
+def bundled_types() -> Typesdict:
+    """The ros2_medkit_msgs types bundled in ``interfaces/``, services as Request/Response/Event."""
+    return _package_types(MEDKIT_PACKAGE)
+
+
+@cache
+def reference_types() -> Typesdict:
+    """The standard types the hand-written decoders are written for (DiagnosticArray and what it
+    holds), bundled so that checking a recording against them needs no rosbags store."""
+    types: Typesdict = {}
+    for package in REFERENCE_PACKAGES:
+        types.update(_package_types(package))
+    return types
 
 
 @cache

@@ -22,7 +22,7 @@ from medkit_replay.inputs.cdr_refusals import (
     sequence_refusal,
     string_refusal,
 )
-from medkit_replay.msgdefs import base_typestore
+from medkit_replay.msgdefs import reference_types
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -50,7 +50,7 @@ _SPECIAL: dict[str, Callable[[Typestore], Callable[[bytes], object]]] = {
 
 def _standard(msgtype: str, store: Typestore) -> bool:
     try:
-        return layout(store, msgtype) == layout(base_typestore(), msgtype)
+        return layout(store.fielddefs, msgtype) == layout(reference_types(), msgtype)
     except (KeyError, TypeError, ValueError):
         return False
 

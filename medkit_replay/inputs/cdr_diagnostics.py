@@ -24,7 +24,7 @@ from medkit_replay.inputs.rosbags_internals import max_sequence_length, unpack_l
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from rosbags.interfaces.typing import FieldDesc
+    from rosbags.interfaces.typing import FieldDesc, Typesdict
     from rosbags.typesys.store import Typestore
 
 
@@ -35,18 +35,21 @@ _TIME = Struct("<iI").unpack_from
 _MAX_HEADS = 4096
 
 
-def layout(store: Typestore, typename: str) -> tuple[object, ...]:
-    """A type's fields with every referenced type expanded: what decoding depends on."""
+def layout(types: Typesdict, typename: str) -> tuple[object, ...]:
+    """A type's fields with every referenced type expanded: what decoding depends on.
+
+    ``types`` maps names to (constants, fields), as a store's ``fielddefs`` does.
+    """
     return tuple(
-        (name, layout(store, desc[1]) if desc[0] == Nodetype.NAME else _sublayout(store, desc))
-        for name, desc in store.get_msgdef(typename).fields
+        (name, layout(types, desc[1]) if desc[0] == Nodetype.NAME else _sublayout(types, desc))
+        for name, desc in types[typename][1]
     )
 
 
-def _sublayout(store: Typestore, desc: FieldDesc) -> object:
+def _sublayout(types: Typesdict, desc: FieldDesc) -> object:
     if desc[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE):
         sub, bound = desc[1]
-        inner = layout(store, sub[1]) if sub[0] == Nodetype.NAME else sub
+        inner = layout(types, sub[1]) if sub[0] == Nodetype.NAME else sub
         return (desc[0], inner, bound)
     return desc
 

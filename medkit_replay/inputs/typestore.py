@@ -37,8 +37,9 @@ def _references(desc: FieldDesc) -> Iterator[str]:
         yield from _references(desc[1][0])
 
 
-def _complete(types: Typesdict, fallback: Typesdict) -> Typesdict:
-    """Add the types a definition references but does not carry, taken from the fallback store.
+def _complete(types: Typesdict, fallback: Callable[[], Typesdict]) -> Typesdict:
+    """Add the types a definition references but does not carry, taken from the fallback store
+    (built only when something is missing: a recording usually carries every type it uses).
 
     Raises:
         DefinitionError: a referenced type is defined nowhere.
@@ -51,11 +52,16 @@ def _complete(types: Typesdict, fallback: Typesdict) -> Typesdict:
         name = pending.pop()
         if name in done:
             continue
-        if name not in fallback:
+        known = fallback()
+        if name not in known:
             raise DefinitionError(f"definition refers to {name}, which it does not define")
-        done[name] = fallback[name]
+        done[name] = known[name]
         pending.extend(ref for _, desc in done[name][1] for ref in _references(desc))
     return done
+
+
+def _base_fielddefs() -> Typesdict:
+    return base_typestore().fielddefs
 
 
 class Decoder:
@@ -68,14 +74,31 @@ class Decoder:
     """
 
     def __init__(
-        self, msgtype: str, candidates: list[tuple[str, Typestore]], note: Callable[[str], None]
+        self,
+        msgtype: str,
+        candidates: list[tuple[str, Typestore]],
+        note: Callable[[str], None],
+        bundled: Callable[[], tuple[str, Typestore] | None] | None = None,
     ) -> None:
+        """``bundled``, if given, gives the last candidate when first needed (building rosbags'
+        store costs a tenth of a second, and a recording's own definition usually fits)."""
         self.msgtype = msgtype
         self._candidates = [
             (label, store, generated_decoder(msgtype, store)) for label, store in candidates
         ]
         self._note = note
+        self._bundled = bundled
         self._first = self._candidates[0][2]
+
+    def _extend(self) -> bool:
+        """Add the bundled candidate (once); False when there is none."""
+        bundled, self._bundled = self._bundled, None
+        found = bundled() if bundled is not None else None
+        if found is None:
+            return False
+        label, store = found
+        self._candidates.append((label, store, generated_decoder(self.msgtype, store)))
+        return True
 
     def decode(self, raw: bytes | memoryview) -> object:
         """Deserialize one payload.
@@ -96,7 +119,8 @@ class Decoder:
     def _each(self, raw: bytes, start: int, first_error: Exception | None) -> object:
         """Try the candidates from ``start`` on; the first that fits moves to the front."""
         plain = raw[:2] == PLAIN_CDR
-        for index in range(start, len(self._candidates)):
+        index = start - 1
+        while (index := index + 1) < len(self._candidates) or self._extend():
             label, store, generated = self._candidates[index]
             try:
                 if generated is not None and plain:
@@ -149,7 +173,7 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
         types = types_from_definition(msgtype, definition)
         if msgtype not in types:
             raise DefinitionError(f"recorded definition does not define {msgtype}")
-        complete = _complete(types, base_typestore().fielddefs)
+        complete = _complete(types, _base_fielddefs)
         check_definition(msgtype, complete)  # before rosbags writes code proportional to it
         store = get_typestore(Stores.EMPTY)
         store.register(complete)
@@ -182,12 +206,18 @@ def make_decoder(
             problem = recorded
         else:
             candidates.append(recorded)
-    if msgtype in base_typestore().fielddefs:
-        candidates.append(("bundled definition", base_typestore()))
-    if not candidates:
+
+    def bundled() -> tuple[str, Typestore] | None:
+        store = base_typestore()
+        return ("bundled definition", store) if msgtype in store.fielddefs else None
+
+    if candidates:
+        return Decoder(msgtype, candidates, note, bundled), problem
+    found = bundled()
+    if found is None:
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
-    return Decoder(msgtype, candidates, note), problem
+    return Decoder(msgtype, [found], note), problem
 
 
 def message_store(msgtype: str, definition: Definition) -> Typestore:
