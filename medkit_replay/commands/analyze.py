@@ -139,7 +139,7 @@ def analyze(
     )
     bar = None
     if not quiet:  # rich (bar and summary) is loaded only for people to read
-        from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+        from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
 
         bar = progress_bar(sys.stderr)
     with bar if bar is not None else nullcontext():

@@ -118,7 +118,7 @@ def _check_group(budget: Budget, group: list[Path | str], configs: tuple[Path, .
     """Replay one run and check it; a recording that cannot be read is a failed run saying why
     (a config problem is still the whole command's, exit 2)."""
     from medkit_replay.checks.evaluate import check_run, unreadable_run  # noqa: PLC0415
-    from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+    from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
     labels = [str(path) for path in group]

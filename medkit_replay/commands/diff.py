@@ -39,8 +39,8 @@ class _Side:
 
     def __init__(self, path: Path | str, configs: tuple[Path, ...], *, quiet: bool) -> None:
         from medkit_replay.diffing import read_report  # noqa: PLC0415
+        from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
         from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
-        from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
         from medkit_replay.pipeline import replay  # noqa: PLC0415
 
         self.path = path

@@ -87,7 +87,7 @@ def explain(
         print_story,
         write_story_json,
     )
-    from medkit_replay.outputs.progress import progress_bar  # noqa: PLC0415
+    from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
     from medkit_replay.trace import FaultTrace  # noqa: PLC0415
 

@@ -15,13 +15,13 @@ from medkit_replay.evidence.frames import freeze_frames
 from medkit_replay.evidence.graph import NodeGraph, load_graph
 from medkit_replay.evidence.plan import plan_evidence
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
-from medkit_replay.evidence.source import EvidenceSource
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
     from pathlib import Path
 
     from medkit_replay.evidence.plan import Plan
+    from medkit_replay.evidence.source import EvidenceSource
     from medkit_replay.model import (
         EvidenceRecording,
         ReportRecord,
@@ -97,6 +97,9 @@ def _collect(
     def opened() -> EvidenceSource:
         nonlocal source
         if source is None:
+            # The reader of recordings' topic ranges, loaded only when a capture reads one.
+            from medkit_replay.evidence.source import EvidenceSource  # noqa: PLC0415
+
             source = EvidenceSource(inputs)
         return source
 

@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, TextIO
 if TYPE_CHECKING:
     from rich.console import Console, RenderableType
 
+    from medkit_replay.outputs.progress import ProgressBar
+
 DEFAULT_WIDTH = 80
 """Columns used when the detected width is unusable (``COLUMNS=0``)."""
 WIDTH_RANGE = (72, 1000)
@@ -60,6 +62,16 @@ def bar_terminal(stream: TextIO, *, quiet: bool = False) -> bool:
 
     console = Console(file=stream)
     return console.is_terminal and not console.is_dumb_terminal
+
+
+def progress_bar(stream: TextIO, *, quiet: bool = False) -> ProgressBar | None:
+    """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal
+    (rich's progress machinery is loaded only for a bar that is drawn)."""
+    if not bar_terminal(stream, quiet=quiet):
+        return None
+    from medkit_replay.outputs.progress import ProgressBar  # noqa: PLC0415
+
+    return ProgressBar(stream)
 
 
 def plain_text(renderable: RenderableType, width: int, *, crop: bool = True) -> str:

@@ -22,8 +22,6 @@ from rich.progress import (
 )
 from rich.text import Text
 
-from medkit_replay.outputs.console import bar_terminal
-
 if TYPE_CHECKING:
     from types import TracebackType
     from typing import Self
@@ -138,8 +136,3 @@ class _Pass:
     task: TaskID
     origin_ns: int | None
     total: float | None
-
-
-def progress_bar(stream: TextIO, *, quiet: bool = False) -> ProgressBar | None:
-    """A progress bar on ``stream``, or None under ``--quiet`` or when it is not a terminal."""
-    return ProgressBar(stream) if bar_terminal(stream, quiet=quiet) else None

@@ -10,9 +10,10 @@ import pytest
 
 from medkit_replay.cli import main
 from medkit_replay.inputs import open_recording
+from medkit_replay.outputs.console import progress_bar
 from medkit_replay.outputs.json_report import dumps
 from medkit_replay.outputs.mcap_events import write_mcap
-from medkit_replay.outputs.progress import ProgressBar, progress_bar
+from medkit_replay.outputs.progress import ProgressBar
 from medkit_replay.pipeline import Progress, replay
 from tests.outputs.scripts import SEC, T0, FakeTTY, healing_config, mission, report, write_script
 
