@@ -13,7 +13,7 @@ import pickle
 import tempfile
 from bisect import bisect_right
 from collections.abc import Callable, Iterator, Sequence
-from typing import IO, Generic, Protocol, TypeVar, overload
+from typing import IO, Any, Generic, Protocol, TypeVar, overload
 
 from medkit_replay.errors import MedkitReplayError
 
@@ -48,6 +48,15 @@ class RowCodec(Protocol[T]):
         ...
 
 
+class SpillListener(Protocol):
+    """Told of every chunk a spool spills, with the pickled rows it wrote (to work on them
+    elsewhere while the replay goes on: ``outputs/json_ahead.py``)."""
+
+    def spilled(self, spool: Spool[Any], index: int, data: bytes, /) -> None:
+        """Chunk ``index`` of ``spool`` is on disk; ``data`` is its pickled list of rows."""
+        ...
+
+
 class Spool(Sequence[T], Generic[T]):
     """A list-like sequence of records; all but the newest chunk live on disk.
 
@@ -56,9 +65,16 @@ class Spool(Sequence[T], Generic[T]):
     are still being appended.
     """
 
-    def __init__(self, chunk_size: int | None = None, *, codec: RowCodec[T] | None = None) -> None:
+    def __init__(
+        self,
+        chunk_size: int | None = None,
+        *,
+        codec: RowCodec[T] | None = None,
+        listener: SpillListener | None = None,
+    ) -> None:
         self._chunk_size = max(chunk_size or DEFAULT_CHUNK, 1)
         self._codec = codec
+        self._listener = listener if codec is not None else None  # rows only
         self._tail: list[object] = []  # records, and rows with a codec; never replaced
         self._chunks: list[tuple[int, int]] = []  # (file offset, byte length) per spilled chunk
         self._starts: list[int] = []  # index of each spilled chunk's first record
@@ -118,6 +134,8 @@ class Spool(Sequence[T], Generic[T]):
         self._starts.append(self._spilled)
         self._spilled += len(self._tail)
         self._tail.clear()  # in place: row_sink() hands out its append
+        if self._listener is not None:
+            self._listener.spilled(self, len(self._chunks) - 1, data)
 
     def _chunk(self, index: int) -> list[object]:
         if self._cache is not None and self._cache[0] == index:
@@ -152,14 +170,23 @@ class Spool(Sequence[T], Generic[T]):
 
     def row_batches(self) -> Iterator[list[Row]]:
         """The records in their row form, in order, a chunk at a time (only with a codec)."""
+        for index in range(self.batch_count):
+            if items := self.row_batch(index):
+                yield items
+
+    @property
+    def batch_count(self) -> int:
+        """How many batches :meth:`row_batch` has: the spilled chunks, then the tail."""
+        return len(self._chunks) + 1
+
+    def row_batch(self, index: int) -> list[Row]:
+        """Spilled chunk ``index`` (the tail after the last) in row form (only with a codec)."""
         codec = self._codec
         assert codec is not None
-        for index in range(len(self._chunks) + 1):
-            items = self._chunk(index) if index < len(self._chunks) else self._tail
-            if set(map(type, items)) - {tuple}:  # some were read back as records
-                items = [x if type(x) is tuple else codec.encode(x) for x in items]  # type: ignore[arg-type]
-            if items:
-                yield items  # type: ignore[misc]  # rows only now
+        items = self._chunk(index) if index < len(self._chunks) else self._tail
+        if set(map(type, items)) - {tuple}:  # some were read back as records
+            items = [x if type(x) is tuple else codec.encode(x) for x in items]  # type: ignore[arg-type]
+        return items  # type: ignore[return-value]  # rows only now
 
     def __len__(self) -> int:
         return self._spilled + len(self._tail)

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from click.decorators import FC
 
+    from medkit_replay.outputs.json_report import EncodedAhead
     from medkit_replay.result import Result
 
 
@@ -122,6 +123,7 @@ def analyze(
     """
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
+    from medkit_replay.outputs.json_ahead import JsonAhead  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
     if evidence_all and evidence_dir is None:
@@ -142,9 +144,13 @@ def analyze(
         from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
 
         bar = progress_bar(sys.stderr)
-    with bar if bar is not None else nullcontext():
-        result = replay(list(inputs), list(configs), progress=bar, evidence=evidence)
-    write_reports(result, json_out, chosen, writers, quiet=quiet)
+    # The report's long lists are encoded by a helper process while the replay runs.
+    with JsonAhead() if json_out is not None else nullcontext() as ahead:
+        with bar if bar is not None else nullcontext():
+            result = replay(
+                list(inputs), list(configs), progress=bar, evidence=evidence, spill_listener=ahead
+            )
+        write_reports(result, json_out, chosen, writers, quiet=quiet, ahead=ahead)
 
 
 def prepare_reports(
@@ -173,16 +179,19 @@ def write_reports(
     writers: list[Callable[[Result, Path], object]],
     *,
     quiet: bool,
+    ahead: EncodedAhead | None = None,
 ) -> None:
-    """Write the JSON report and every chosen output, then the human summary (unless quiet)."""
+    """Write the JSON report and every chosen output, then the human summary (unless quiet).
+
+    ``ahead`` may hold batches of the report's long lists already encoded."""
     from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
 
     if json_out == "-":
         with standard_output("the report"):
-            write_report_stdout(result)
+            write_report_stdout(result, ahead)
     elif json_out is not None:
         try:
-            write_report(result, Path(json_out))
+            write_report(result, Path(json_out), ahead)
         except OSError as err:
             raise MedkitReplayError(
                 f"cannot write report: {err.strerror or err}", path=json_out

@@ -9,9 +9,13 @@ from __future__ import annotations
 import json
 from dataclasses import fields, is_dataclass
 from operator import attrgetter
-from typing import IO, TYPE_CHECKING, Any, cast, get_args, get_origin, get_type_hints
+from typing import IO, TYPE_CHECKING, Any, Protocol, cast, get_args, get_origin, get_type_hints
 
 from medkit_replay.model import (
+    CLEAR_ROWS,
+    EVENT_ROWS,
+    REPORT_ROWS,
+    TRANSITION_ROWS,
     ClearRecord,
     Cluster,
     EvidenceRecording,
@@ -25,7 +29,7 @@ from medkit_replay.model import (
     SnapshotCapture,
     Transition,
 )
-from medkit_replay.outputs.json_rows import ROW_SEPARATOR, Chunk, RecordLines
+from medkit_replay.outputs.json_rows import ROW_SEPARATOR, Chunk, RecordLines, Row
 from medkit_replay.result import REPORT_SCHEMA
 from medkit_replay.spool import Spool
 
@@ -85,6 +89,14 @@ snapshot_dict = record_dict(SnapshotCapture)
 recording_dict = record_dict(EvidenceRecording)
 
 
+class EncodedAhead(Protocol):
+    """Spilled batches of the long lists already encoded as report lines (elsewhere)."""
+
+    def encoded(self, spool: Spool[Any], index: int, /) -> bytes | None:
+        """Batch ``index`` of ``spool`` as report lines, or None if it is not at hand."""
+        ...
+
+
 class _Rows:
     """A long list written batch by batch, so a long report is never held in memory whole."""
 
@@ -96,13 +108,25 @@ class _Rows:
         """Every record as the report lists it."""
         return [self.lines.as_dict(r) for r in self.records]
 
-    def chunks(self) -> Iterator[Chunk]:
-        """The records as report lines, in batches; spooled rows are never made records."""
+    def chunks(self, ahead: EncodedAhead | None = None) -> Iterator[Chunk]:
+        """The records as report lines, in batches; spooled rows are never made records, and a
+        batch ``ahead`` holds already is taken as it is."""
         records = self.records
-        if isinstance(records, Spool) and isinstance(records.codec, RecordRows):
-            codec = records.codec
-            return self.lines.row_chunks(records.row_batches(), codec.names, codec.decode)
-        return self.lines.chunks(records)
+        if not (isinstance(records, Spool) and isinstance(records.codec, RecordRows)):
+            yield from self.lines.chunks(records)
+            return
+        for index in range(records.batch_count):
+            done = ahead.encoded(records, index) if ahead is not None else None
+            if done is None:
+                yield from encode_batch(self.lines, records.codec, records.row_batch(index))
+            elif done:
+                yield done
+
+
+def encode_batch(lines: RecordLines, codec: RecordRows[Any], rows: list[Row]) -> Iterator[Chunk]:
+    """One batch of spooled rows as report lines (pieces to be joined by ROW_SEPARATOR)."""
+    if rows:
+        yield from lines.row_chunks([rows], codec.names, codec.decode)
 
 
 _EVENTS = RecordLines(FaultEvent, event_dict)
@@ -110,6 +134,13 @@ _TRANSITIONS = RecordLines(Transition, transition_dict)
 _REPORTS = RecordLines(ReportRecord, report_dict)
 _CLEARS = RecordLines(ClearRecord, clear_dict)
 _NEAR_MISSES = RecordLines(NearMiss, near_miss_dict)
+SPOOLED_LISTS: dict[str, tuple[RecordLines, RecordRows[Any]]] = {
+    "FaultEvent": (_EVENTS, EVENT_ROWS),
+    "Transition": (_TRANSITIONS, TRANSITION_ROWS),
+    "ReportRecord": (_REPORTS, REPORT_ROWS),
+    "ClearRecord": (_CLEARS, CLEAR_ROWS),
+}
+"""The long lists the replay spools, by record class name: how their rows are written."""
 
 
 def _sections(result: Result) -> list[tuple[str, object]]:
@@ -172,7 +203,7 @@ def _dump(value: object) -> bytes:
     return text.replace("\n", "\n  ").encode("ascii")
 
 
-def report_chunks(result: Result) -> Iterator[Chunk]:
+def report_chunks(result: Result, ahead: EncodedAhead | None = None) -> Iterator[Chunk]:
     """The report as ASCII bytes, piece by piece, keys in the contract's order.
 
     Small sections are indented; the long record lists (events, transitions, reports,
@@ -186,7 +217,7 @@ def report_chunks(result: Result) -> Iterator[Chunk]:
             yield _dump(value)
             continue
         empty = True
-        for chunk in value.chunks():
+        for chunk in value.chunks(ahead):
             yield b"[\n    " if empty else ROW_SEPARATOR
             yield chunk
             empty = False
@@ -194,9 +225,10 @@ def report_chunks(result: Result) -> Iterator[Chunk]:
     yield b"\n}\n"
 
 
-def write_json_bytes(result: Result, stream: IO[bytes]) -> None:
-    """Stream the report to a binary stream (ASCII-only)."""
-    for chunk in report_chunks(result):
+def write_json_bytes(result: Result, stream: IO[bytes], ahead: EncodedAhead | None = None) -> None:
+    """Stream the report to a binary stream (ASCII-only); ``ahead`` may hold batches of the
+    long lists already encoded."""
+    for chunk in report_chunks(result, ahead):
         stream.write(chunk)
 
 

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterator
     from pathlib import Path
 
+    from medkit_replay.outputs.json_report import EncodedAhead
     from medkit_replay.result import Result
 
 GZIP_LEVEL = 6
@@ -47,13 +48,14 @@ def compressed(raw: IO[bytes], compression: str | None) -> Iterator[IO[bytes]]:
             yield stream
 
 
-def write_report(result: Result, target: Path) -> None:
-    """Write the report to ``target`` (compressed when its suffix says so), atomically."""
+def write_report(result: Result, target: Path, ahead: EncodedAhead | None = None) -> None:
+    """Write the report to ``target`` (compressed when its suffix says so), atomically;
+    ``ahead`` may hold batches of its long lists already encoded."""
     with atomic_binary(target) as raw, compressed(raw, report_compression(target)) as stream:
-        write_json_bytes(result, stream)
+        write_json_bytes(result, stream, ahead)
 
 
-def write_report_stdout(result: Result) -> None:
+def write_report_stdout(result: Result, ahead: EncodedAhead | None = None) -> None:
     """Write the report (plain) to standard output."""
     out = sys.stdout
     binary = getattr(out, "buffer", None)
@@ -61,5 +63,5 @@ def write_report_stdout(result: Result) -> None:
         write_json(result, out)
         return
     out.flush()
-    write_json_bytes(result, binary)
+    write_json_bytes(result, binary, ahead)
     binary.flush()

@@ -39,7 +39,7 @@ from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Request, Router, recorded_report_codes
 from medkit_replay.pipeline.tracing import Tracer
-from medkit_replay.spool import Row, Spool
+from medkit_replay.spool import Row, SpillListener, Spool
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
@@ -68,6 +68,7 @@ def replay(
     follow: Follow | None = None,
     live: Callable[[Transition | FaultEvent], None] | None = None,
     evidence: EvidenceOptions | None = None,
+    spill_listener: SpillListener | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -92,6 +93,9 @@ def replay(
         live: called with every transition and FaultEvent as the manager records it.
         evidence: the node graph and where to write black-box recordings (freeze frames
             and recordings are listed in the result whatever it says).
+        spill_listener: told of every chunk of events, transitions, reports and clears
+            spilled to disk (to encode them elsewhere meanwhile); the Result does not
+            depend on it.
 
     Raises:
         InputError: an input cannot be used at all.
@@ -108,10 +112,11 @@ def replay(
     snapshots, snapshot_warnings = snapshot_config(params.node("fault_manager"))
     warnings += snapshot_warnings
 
-    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS)
-    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS)
-    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS)
-    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS)
+    listener = spill_listener
+    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS, listener=listener)
+    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS, listener=listener)
+    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS, listener=listener)
+    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS, listener=listener)
     output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
     manager = FaultManager(manager_config, output)
     # Rows straight into the spools' tails; the loop settles them now and then.
