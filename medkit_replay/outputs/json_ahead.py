@@ -8,6 +8,7 @@ the report then copies those lines. Whatever the child does not deliver is encod
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import pickle
 import subprocess
@@ -31,6 +32,8 @@ _FRAME = Struct("<I32sIQ")  # list number, record class, chunk index, length of 
 _DONE = Struct("<IIQQ")  # list number, chunk index, offset and length of its lines in the file
 QUEUE_LIMIT = 64 * 1024 * 1024
 """Pickled bytes waiting for the child at most; chunks beyond it are encoded here instead."""
+PIPE_SIZE = 1024 * 1024
+"""Bytes the pipe to the child holds, asked of the system (Linux allows up to 1 MiB by default)."""
 FRAME_LIMIT = 1 << 31
 """The largest chunk the child takes (a spool chunk pickles to a few MB)."""
 
@@ -97,6 +100,11 @@ class JsonAhead:
             self._failed = True
             self.close()
             return False
+        if hasattr(fcntl, "F_SETPIPE_SZ") and self._child.stdin is not None:
+            # A chunk in one write where the system allows: the writer thread then seldom
+            # waits for the child, nor takes the interpreter lock back and forth meanwhile.
+            with contextlib.suppress(OSError):
+                fcntl.fcntl(self._child.stdin.fileno(), fcntl.F_SETPIPE_SZ, PIPE_SIZE)
         self._thread = threading.Thread(target=self._send, name="medkit-replay-json", daemon=True)
         self._thread.start()
         return True
