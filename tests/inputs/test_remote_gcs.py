@@ -3,8 +3,9 @@ obstore's own GCS client, named by ``STORAGE_EMULATOR_HOST`` as a user would), a
 the Range server answering GCS's paths where fake-gcs-server cannot (a token, a 403).
 
 The same checks as the S3 tests: the same report remote and local (its name aside) for a
-bare MCAP, an MCAP and an sqlite3 bag folder; a fleet found under a prefix as under a local
-folder; a missing object or prefix is one line naming the URL, exit 2; no credential is shown.
+bare MCAP, an MCAP and an sqlite3 bag folder, and a cut object read as a cut file; a fleet
+found under a prefix as under a local folder, also by Dask workers; a missing object or
+prefix is one line naming the URL, exit 2; no credential is shown.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import pytest
 from medkit_replay.cli import main
 from medkit_replay.fleet.discover import discover
 from tests.fleet.fleet_support import fleet_rows, fleet_tree
+from tests.inputs.builders import truncated
 from tests.remote_support import (
     SAMPLES,
     SECRET,
@@ -115,6 +117,28 @@ def test_fleet_over_a_gcs_prefix_finds_and_replays_what_a_local_folder_would(
     assert len(expected) == 3
     assert all(not run.get("error") for run in expected)
     assert fleet_rows(tmp_path / "r", url) == expected
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=1,
+        processes=True,
+        threads_per_worker=1,
+        dashboard_address=None,
+        worker_dashboard_address=None,
+    ) as cluster:  # workers find the server as the user's shell does: STORAGE_EMULATOR_HOST
+        dask = ["--dask", cluster.scheduler_address, "--out", str(tmp_path / "d")]
+        assert main(["fleet", url, *config_args(), "--quiet", *dask]) == 0
+    assert fleet_rows(tmp_path / "d", url) == expected
+
+
+def test_a_cut_object_is_read_as_far_as_a_cut_local_file(
+    gcs_endpoint: str, gcs_bucket: str, tmp_path: Path
+) -> None:
+    whole = SAMPLES / "nav2_mission_mcap" / "nav2_mission_mcap.mcap"
+    cut = truncated(whole, tmp_path / "cut.mcap", whole.stat().st_size * 2 // 3)
+    gcs_upload(gcs_endpoint, gcs_bucket, cut, "cut.mcap")
+    remote = same_as_local(f"gs://{gcs_bucket}/cut.mcap", cut)
+    assert remote.warnings and all(str(tmp_path) not in w for w in remote.warnings)
+    assert any(w.startswith(f"gs://{gcs_bucket}/cut.mcap: ") for w in remote.warnings)
 
 
 # -- failures and credentials ------------------------------------------------------------------
