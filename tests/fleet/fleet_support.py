@@ -136,3 +136,30 @@ def build_fleet(root: Path, scripts: int = 44) -> Fleet:
     fleet.recordings += fleet.broken
     (root / "notes.txt").write_text("not a recording\n")
     return fleet
+
+
+def fleet_tree(root: Path) -> Path:
+    """Two bag folders (one split-named without metadata), a bare file, a file that is not a
+    recording, a hidden folder, and a bag folder's subfolder that is not looked at: a fleet to
+    copy under a prefix of an object store."""
+    shutil.copytree(SAMPLES / "nav2_mission_mcap", root / "robot7" / "nav2_mission_mcap")
+    shutil.copytree(SAMPLES / "nav2_mission_sqlite3", root / "robot7" / "sqlite_run")
+    (root / "robot7" / "sqlite_run" / "sqlite_run.db3").write_bytes(
+        (root / "robot7" / "sqlite_run" / "nav2_mission_sqlite3.db3").read_bytes()
+    )
+    (root / "robot7" / "sqlite_run" / "nav2_mission_sqlite3.db3").unlink()
+    (root / "robot7" / "sqlite_run" / "metadata.yaml").unlink()
+    (root / "robot9").mkdir()
+    shutil.copy(SAMPLES / "service_calls.mcap", root / "robot9" / "service_calls.mcap")
+    (root / "robot9" / "notes.txt").write_text("not a recording\n")
+    (root / ".trash").mkdir()
+    shutil.copy(SAMPLES / "service_calls.mcap", root / ".trash" / "old.mcap")
+    return root
+
+
+def fleet_rows(out: Path, name: str) -> list[dict[str, object]]:
+    """The rows of a fleet's runs.json, each path made relative to ``name``, sorted by it."""
+    runs: list[dict[str, object]] = json.loads((out / "runs.json").read_text())
+    for run in runs:
+        run["path"] = str(run["path"]).removeprefix(name).rstrip("/")
+    return sorted(runs, key=lambda run: str(run["path"]))

@@ -4,16 +4,14 @@ read them straight from the store."""
 
 from __future__ import annotations
 
-import json
-import shutil
 from typing import TYPE_CHECKING
 
 import pytest
 
 from medkit_replay.cli import main
 from medkit_replay.fleet.discover import discover
-from tests.fleet.fleet_support import SAMPLES
-from tests.remote_support import aws_environment, s3_server, upload
+from tests.fleet.fleet_support import SAMPLES, fleet_rows, fleet_tree
+from tests.remote_support import aws_environment, s3_server, tree_objects, upload
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -31,36 +29,13 @@ def s3_endpoint() -> Iterator[str]:
         yield endpoint
 
 
-def fleet_tree(root: Path) -> Path:
-    """Two bag folders (one split-named without metadata), a bare file, a file that is not a
-    recording, a hidden folder, and a bag folder's subfolder that is not looked at."""
-    shutil.copytree(SAMPLES / "nav2_mission_mcap", root / "robot7" / "nav2_mission_mcap")
-    shutil.copytree(SAMPLES / "nav2_mission_sqlite3", root / "robot7" / "sqlite_run")
-    (root / "robot7" / "sqlite_run" / "sqlite_run.db3").write_bytes(
-        (root / "robot7" / "sqlite_run" / "nav2_mission_sqlite3.db3").read_bytes()
-    )
-    (root / "robot7" / "sqlite_run" / "nav2_mission_sqlite3.db3").unlink()
-    (root / "robot7" / "sqlite_run" / "metadata.yaml").unlink()
-    (root / "robot9").mkdir()
-    shutil.copy(SAMPLES / "service_calls.mcap", root / "robot9" / "service_calls.mcap")
-    (root / "robot9" / "notes.txt").write_text("not a recording\n")
-    (root / ".trash").mkdir()
-    shutil.copy(SAMPLES / "service_calls.mcap", root / ".trash" / "old.mcap")
-    return root
-
-
-def upload_tree(bucket: str, root: Path, prefix: str) -> None:
-    for path in sorted(root.rglob("*")):
-        if path.is_file():
-            upload(bucket, path, f"{prefix}/{path.relative_to(root).as_posix()}")
-
-
 def test_fleet_over_a_prefix_finds_and_replays_what_a_local_folder_would(
     s3_endpoint: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     bucket = aws_environment(monkeypatch, s3_endpoint, tmp_path)
     local = fleet_tree(tmp_path / "fleet")
-    upload_tree(bucket, local, "2026-03/fleet")
+    for path, key in tree_objects(local, "2026-03/fleet"):
+        upload(bucket, path, key)
     url = f"s3://{bucket}/2026-03/fleet/"
     found = discover([url])
     assert found == [
@@ -88,21 +63,15 @@ def test_fleet_over_a_prefix_finds_and_replays_what_a_local_folder_would(
         address = cluster.scheduler_address
         assert main(["fleet", url, *args, "--dask", address, "--out", str(tmp_path / "d")]) == 0
 
-    def rows(out: str, name: str) -> list[dict[str, object]]:
-        runs = json.loads((tmp_path / out / "runs.json").read_text())
-        for run in runs:
-            run["path"] = str(run["path"]).removeprefix(name).rstrip("/")
-        return sorted(runs, key=lambda run: str(run["path"]))
-
-    expected = rows("l", f"{local}/")
+    expected = fleet_rows(tmp_path / "l", f"{local}/")
     assert [run["path"] for run in expected] == [
         "robot7/nav2_mission_mcap",
         "robot7/sqlite_run",
         "robot9/service_calls.mcap",
     ]
     assert all(not run.get("error") for run in expected)
-    assert rows("r", url) == expected
-    assert rows("d", url) == expected
+    assert fleet_rows(tmp_path / "r", url) == expected
+    assert fleet_rows(tmp_path / "d", url) == expected
 
 
 def test_an_http_prefix_cannot_be_listed(tmp_path: Path) -> None:

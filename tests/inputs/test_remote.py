@@ -16,7 +16,6 @@ import subprocess
 import sys
 import time
 from dataclasses import replace
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
@@ -29,10 +28,18 @@ from medkit_replay.outputs.json_report import dumps
 from tests.inputs.builders import diag, flipped, string_msg, truncated, write_bag
 from tests.remote_support import (
     KEY_ID,
+    NAV2,
+    ROOT,
+    SAMPLES,
     SECRET,
     aws_environment,
+    cli,
+    config_args,
+    one_line_error,
     range_server,
+    report_text,
     s3_server,
+    same_as_local,
     upload,
 )
 from tests.speed.support import plain
@@ -40,16 +47,11 @@ from tests.speed.test_index_reading import mixed_bag
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
-
-    from medkit_replay.result import Result
+    from pathlib import Path
 
 pytest.importorskip("obstore")
 pytest.importorskip("boto3")
 pytest.importorskip("moto.server")
-
-ROOT = Path(__file__).resolve().parents[2]
-SAMPLES = ROOT / "sample_bags"
-NAV2 = [str(ROOT / "rules/nav2/fault_manager.yaml"), str(ROOT / "rules/nav2/bridges.yaml")]
 
 
 @pytest.fixture(scope="module")
@@ -62,27 +64,6 @@ def s3_endpoint() -> Iterator[str]:
 def s3_env(s3_endpoint: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> str:
     """The AWS environment a user would set for MinIO; returns a fresh bucket's name."""
     return aws_environment(monkeypatch, s3_endpoint, tmp_path)
-
-
-def report_text(result: Result, name: str, local: Path) -> str:
-    """The JSON report, with the remote input's name put back to the local path's."""
-    text = dumps(result)
-    return text.replace(json.dumps(name)[1:-1], json.dumps(str(local))[1:-1])
-
-
-def same_as_local(url: str, local: Path, configs: list[str] = NAV2) -> Result:
-    remote = replay([url], configs)
-    assert remote.inputs[0].path == url.rstrip("/")
-    assert report_text(remote, url.rstrip("/"), local) == dumps(replay([local], configs))
-    return remote
-
-
-def cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    command = [sys.executable, "-m", "medkit_replay.cli", *args]
-    full = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
-    return subprocess.run(
-        command, capture_output=True, text=True, env=full, timeout=120, check=False
-    )
 
 
 # -- the same report, remote and local ----------------------------------------------------------
@@ -125,15 +106,11 @@ def test_sqlite3_bag_is_downloaded_to_a_temporary_copy_that_is_removed(
     temp = tmp_path / "tmpdir"
     temp.mkdir()
     report = tmp_path / "report.json"
-    done = cli("analyze", url, *_configs(), "--json", str(report), env={"TMPDIR": str(temp)})
+    done = cli("analyze", url, *config_args(), "--json", str(report), env={"TMPDIR": str(temp)})
     assert done.returncode == 0, done.stderr
     assert list(temp.iterdir()) == []
     expected = dumps(replay([local], NAV2))
     assert report.read_text().replace(url, str(local)) == expected
-
-
-def _configs() -> list[str]:
-    return [arg for path in NAV2 for arg in ("--config", path)]
 
 
 # -- reading by ranges -------------------------------------------------------------------------
@@ -183,29 +160,21 @@ def test_the_terminal_summary_says_how_much_was_fetched(tmp_path: Path) -> None:
 # -- failures ---------------------------------------------------------------------------------
 
 
-def _one_line_error(done: subprocess.CompletedProcess[str]) -> str:
-    assert done.returncode == 2, (done.stdout, done.stderr)
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1, done.stderr
-    assert "Traceback" not in done.stderr
-    return lines[0]
-
-
 def test_a_missing_object_is_one_line_naming_the_url(s3_env: str) -> None:
     url = f"s3://{s3_env}/nothing/here.mcap"
-    line = _one_line_error(cli("analyze", url))
+    line = one_line_error(cli("analyze", url))
     assert url in line and "not found" in line
-    line = _one_line_error(cli("analyze", f"s3://{s3_env}/no/such/prefix/"))
+    line = one_line_error(cli("analyze", f"s3://{s3_env}/no/such/prefix/"))
     assert f"s3://{s3_env}/no/such/prefix/" in line
     with range_server(SAMPLES) as (base, _served):
-        line = _one_line_error(cli("analyze", f"{base}/missing.mcap"))
+        line = one_line_error(cli("analyze", f"{base}/missing.mcap"))
     assert f"{base}/missing.mcap: not found (HTTP 404)" in line
 
 
 def test_access_denied_is_one_line_naming_the_url() -> None:
     with range_server(SAMPLES) as (base, served):
         served.forbidden.add("service_calls.mcap")
-        line = _one_line_error(cli("analyze", f"{base}/service_calls.mcap"))
+        line = one_line_error(cli("analyze", f"{base}/service_calls.mcap"))
     assert line.endswith(f"{base}/service_calls.mcap: access denied (HTTP 403)")
 
 
@@ -222,7 +191,7 @@ def test_without_the_remote_extra_one_line_says_how_to_install_it() -> None:
         timeout=60,
         check=False,
     )
-    line = _one_line_error(done)
+    line = one_line_error(done)
     assert "pip install 'medkit-replay[remote]'" in line
 
 
@@ -246,7 +215,7 @@ def test_a_connection_that_keeps_dropping_ends_in_one_line() -> None:
     with range_server(SAMPLES) as (base, served):
         served.drop_next = 10**6
         done = cli("analyze", f"{base}/service_calls.mcap")
-    line = _one_line_error(done)
+    line = one_line_error(done)
     assert line.endswith(f"{base}/service_calls.mcap: connection failed; gave up after 5 tries")
 
 
@@ -256,7 +225,7 @@ def test_credentials_and_queries_never_appear(tmp_path: Path, s3_env: str) -> No
     outputs = []
     report, html = tmp_path / "report.json", tmp_path / "report.html"
     url = f"s3://{s3_env}/bag"
-    ok = cli("analyze", url, *_configs(), "--json", str(report), "--html", str(html))
+    ok = cli("analyze", url, *config_args(), "--json", str(report), "--html", str(html))
     assert ok.returncode == 0, ok.stderr
     outputs += [ok.stdout, ok.stderr, report.read_text(), html.read_text()]
     for args in (
@@ -297,11 +266,11 @@ def test_check_and_diff_take_urls(tmp_path: Path) -> None:
     baseline = tmp_path / "baseline.json"
     budget = ROOT / "rules/budgets/nav2_mission_pass.yaml"
     local = SAMPLES / "nav2_mission_mcap"
-    assert cli("analyze", str(local), *_configs(), "--json", str(baseline)).returncode == 0
+    assert cli("analyze", str(local), *config_args(), "--json", str(baseline)).returncode == 0
     with range_server(SAMPLES) as (base, _served):
         url = f"{base}/nav2_mission_mcap/"
-        diff = cli("diff", str(baseline), url, *_configs())
-        check = cli("check", url, *_configs(), "--budget", str(budget))
+        diff = cli("diff", str(baseline), url, *config_args())
+        check = cli("check", url, *config_args(), "--budget", str(budget))
     assert diff.returncode == 0, diff.stderr
     assert "reports are equal" in diff.stdout
     assert f"{url} (replayed now)" in diff.stdout
@@ -417,15 +386,15 @@ def test_sweep_suggest_rules_and_explain_take_urls(tmp_path: Path) -> None:
     """The tuning commands and explain read a URL as analyze does: same rows, same story."""
     local = _bare_copy()  # an HTTP server cannot be listed: a file's own URL
     vary = ["--vary", "fault_manager.confirmation_threshold=-1,-2", "--jobs", "1", "--quiet"]
-    explain = ["MOTOR_LEFT_OVERHEAT", *_configs(), "--json", "--quiet"]
+    explain = ["MOTOR_LEFT_OVERHEAT", *config_args(), "--json", "--quiet"]
     here, there = tmp_path / "local", tmp_path / "remote"
-    assert cli("sweep", str(local), *_configs(), *vary, "--out", str(here)).returncode == 0
+    assert cli("sweep", str(local), *config_args(), *vary, "--out", str(here)).returncode == 0
     local_story = cli("explain", str(local), *explain)
     with range_server(SAMPLES) as (base, _served):
         url = f"{base}/nav2_mission_mcap/nav2_mission_mcap.mcap"
-        sweep = cli("sweep", url, *_configs(), *vary, "--out", str(there))
+        sweep = cli("sweep", url, *config_args(), *vary, "--out", str(there))
         story = cli("explain", url, *explain)
-        suggest = cli("suggest-rules", url, *_configs(), "--min-support", "1")
+        suggest = cli("suggest-rules", url, *config_args(), "--min-support", "1")
     assert sweep.returncode == 0, sweep.stderr
     for table in ("variants.csv", "codes.csv"):
         assert (there / table).read_text() == (here / table).read_text()
