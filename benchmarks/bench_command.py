@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # tests.oracle: the stdlib encoder, for the before/after ratio
 
-CLI = [sys.executable, "-c", "import sys; from medkit_replay.cli import main; sys.exit(main())"]
+CLI = [sys.executable, "-c", "from medkit_replay.cli import run; run()"]
 """What the ``medkit-replay`` console script runs (without the shell wrappers some installs
 put in front of it, which are the environment's, not ours)."""
 SHORT_S, HOUR_S = 600, 3600

@@ -212,6 +212,39 @@ def test_console_script_runs_without_traceback(tmp_path: Path) -> None:
     assert "Traceback" not in proc.stderr
 
 
+def test_console_script_writes_everything_before_it_leaves(tmp_path: Path) -> None:
+    """The console script leaves without freeing the replay's objects: what it printed and
+    wrote is whole, its status is the command's, and a reader that stops early is no error."""
+    command = [sys.executable, "-m", "medkit_replay.cli", "analyze", str(EXAMPLE), "--json", "-"]
+    whole = subprocess.run([*command, "--config", str(NAV2)], capture_output=True, check=False)
+    assert whole.returncode == 0
+    assert json.loads(whole.stdout)["summary"]["faults"] > 0
+    assert b"faults:" in whole.stderr  # the summary, after the report
+    head = subprocess.run(
+        f"{' '.join(map(str, command))} | head -c 10",
+        shell=True,
+        capture_output=True,
+        check=False,
+        executable="/bin/bash",
+    )
+    assert head.stdout == whole.stdout[:10]
+    assert b"Traceback" not in head.stderr and b"Exception ignored" not in head.stderr
+    failed = subprocess.run(
+        [
+            *command[:3],
+            "check",
+            str(EXAMPLE),
+            "--budget",
+            str(ROOT / "rules" / "budgets" / "nav2_mission_fail.yaml"),
+            "--config",
+            str(NAV2),
+        ],
+        capture_output=True,
+        check=False,
+    )
+    assert failed.returncode == 1  # a check's own status comes through
+
+
 def test_python_api_tables() -> None:
     import medkit_replay  # noqa: PLC0415
     from medkit_replay import replay  # noqa: PLC0415
