@@ -9,6 +9,7 @@ record while it is held in memory, as an appended record does.
 from __future__ import annotations
 
 import errno
+import os
 import pickle
 import tempfile
 from bisect import bisect_right
@@ -142,8 +143,8 @@ class Spool(Sequence[T], Generic[T]):
             return self._cache[1]
         assert self._file is not None
         offset, size = self._chunks[index]
-        self._file.seek(offset)
-        chunk: list[object] = pickle.loads(self._file.read(size))  # our own file
+        # Positional: a forked writer reading the same file shares no file offset with us.
+        chunk: list[object] = pickle.loads(os.pread(self._file.fileno(), size, offset))  # ours
         self._cache = (index, chunk)
         return chunk
 

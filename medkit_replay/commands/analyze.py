@@ -150,6 +150,8 @@ def analyze(
             result = replay(
                 list(inputs), list(configs), progress=bar, evidence=evidence, spill_listener=ahead
             )
+        if ahead is not None:
+            ahead.finish()
         write_reports(result, json_out, chosen, writers, quiet=quiet, ahead=ahead)
 
 
@@ -184,25 +186,32 @@ def write_reports(
     """Write the JSON report and every chosen output, then the human summary (unless quiet).
 
     ``ahead`` may hold batches of the report's long lists already encoded."""
+    from medkit_replay.outputs.forked import Forked  # noqa: PLC0415
     from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
 
-    if json_out == "-":
-        with standard_output("the report"):
-            write_report_stdout(result, ahead)
-    elif json_out is not None:
-        try:
-            write_report(result, Path(json_out), ahead)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write report: {err.strerror or err}", path=json_out
-            ) from None
-    for (output, target), writer in zip(chosen, writers, strict=True):
-        try:
-            writer(result, target)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write {output.label}: {err.strerror or err}", path=str(target)
-            ) from None
+    def others() -> None:
+        for (output, target), writer in zip(chosen, writers, strict=True):
+            try:
+                writer(result, target)
+            except OSError as err:
+                raise MedkitReplayError(
+                    f"cannot write {output.label}: {err.strerror or err}", path=str(target)
+                ) from None
+
+    # With a JSON report to write as well, the other outputs are written meanwhile by a child.
+    with Forked(others) if json_out is not None and chosen else nullcontext():
+        if json_out == "-":
+            with standard_output("the report"):
+                write_report_stdout(result, ahead)
+        elif json_out is not None:
+            try:
+                write_report(result, Path(json_out), ahead)
+            except OSError as err:
+                raise MedkitReplayError(
+                    f"cannot write report: {err.strerror or err}", path=json_out
+                ) from None
+    if json_out is None or not chosen:
+        others()
     if not quiet:
         from medkit_replay.outputs.terminal import print_summary  # noqa: PLC0415
 

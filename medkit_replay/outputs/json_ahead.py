@@ -133,7 +133,7 @@ class JsonAhead:
 
     def encoded(self, spool: Spool[Any], index: int, /) -> bytes | None:
         """Chunk ``index`` of ``spool`` as report lines, or None when the child has not it."""
-        done = self._finish()
+        done = self.finish()
         known = self._lists.get(id(spool))
         if known is None or known[1] is not spool or self._file is None:
             return None
@@ -144,8 +144,9 @@ class JsonAhead:
         data = os.pread(self._file.fileno(), length, offset)
         return data if len(data) == length else None
 
-    def _finish(self) -> dict[tuple[int, int], tuple[int, int]]:
-        """Wait for the child to encode what it was sent; what it finished, by chunk."""
+    def finish(self) -> dict[tuple[int, int], tuple[int, int]]:
+        """Wait for the child to encode what it was sent; what it finished, by chunk. Call it
+        before forking: the child's stdin must be closed here alone for it to see the end."""
         if self._done is not None:
             return self._done
         self._done = {}

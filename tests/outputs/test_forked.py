@@ -1,0 +1,76 @@
+"""Outputs written by a forked child while the JSON report is written: the same files, and the
+child's failures as the parent's own."""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import TYPE_CHECKING
+
+import pytest
+
+from medkit_replay.cli import main
+from medkit_replay.errors import ConfigError
+from medkit_replay.outputs.forked import Forked, ForkedError
+from tests.outputs.scripts import healing_config, mission
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+
+def test_outputs_written_beside_the_report_are_the_ones_written_alone(tmp_path: Path) -> None:
+    script, config = mission(tmp_path), healing_config(tmp_path)
+    base = ["analyze", str(script), "--config", str(config), "--quiet"]
+    alone, beside = tmp_path / "alone", tmp_path / "beside"
+    assert main([*base, "--html", str(alone / "r.html"), "--csv", str(alone / "csv")]) == 0
+    report = tmp_path / "r.json"
+    both = [*base, "--json", str(report), "--html", str(beside / "r.html")]
+    assert main([*both, "--csv", str(beside / "csv")]) == 0
+    assert (beside / "r.html").read_bytes() == (alone / "r.html").read_bytes()
+    for table in sorted((alone / "csv").iterdir()):
+        assert (beside / "csv" / table.name).read_bytes() == table.read_bytes()
+    assert report.stat().st_size > 0
+
+
+def test_a_failing_output_is_the_same_one_line_with_or_without_the_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = mission(tmp_path)
+    (tmp_path / "blocked").write_text("a file where a folder is needed")
+    html = str(tmp_path / "blocked" / "r.html")
+    assert main(["analyze", str(script), "--quiet", "--html", html]) == 2
+    alone = capsys.readouterr().err
+    report = tmp_path / "r.json"
+    assert main(["analyze", str(script), "--quiet", "--json", str(report), "--html", html]) == 2
+    assert capsys.readouterr().err == alone
+    assert alone.startswith("medkit-replay: error: ") and alone.count("\n") == 1
+
+
+def test_the_childs_errors_come_back_as_raised() -> None:
+    def refuse() -> None:
+        raise ConfigError("bad value", path="p.yaml", line=4)
+
+    with pytest.raises(ConfigError, match=r"^p\.yaml:4: bad value$"), Forked(refuse):
+        pass
+
+    def bug() -> None:
+        raise ValueError("oops")
+
+    with pytest.raises(ForkedError, match="ValueError: oops"), Forked(bug):
+        pass
+
+
+def test_a_failure_here_ends_the_child(tmp_path: Path) -> None:
+    marker = tmp_path / "late"
+
+    def slow() -> None:
+        time.sleep(30)
+        marker.write_text("the child outlived its parent's failure")
+
+    with pytest.raises(RuntimeError), Forked(slow) as forked:
+        pid = forked._pid
+        assert pid is not None
+        raise RuntimeError("the report could not be written")
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, 0)  # reaped already
+    assert not marker.exists()
