@@ -71,6 +71,7 @@ def test_a_failure_here_ends_the_child(tmp_path: Path) -> None:
         pid = forked._pid
         assert pid is not None
         raise RuntimeError("the report could not be written")
+    assert pid is not None
     with pytest.raises(ChildProcessError):
         os.waitpid(pid, 0)  # reaped already
     assert not marker.exists()
