@@ -38,7 +38,6 @@ from medkit_replay.pipeline.assemble import assemble_result
 from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Request, Router, recorded_report_codes
-from medkit_replay.pipeline.tracing import Tracer
 from medkit_replay.spool import Row, SpillListener, Spool
 
 if TYPE_CHECKING:
@@ -49,6 +48,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.model import InputSummary
     from medkit_replay.pipeline.loop import Clock
+    from medkit_replay.pipeline.tracing import Tracer
     from medkit_replay.result import Result
     from medkit_replay.trace import FaultTrace
 
@@ -127,7 +127,11 @@ def replay(
     manager.set_row_sinks(reports.row_sink(), event_sink, transition_sink)
     timeline = Timeline(manager)
     router = Router(options)
-    tracer = Tracer(trace, timeline, router) if trace is not None else None
+    tracer = None
+    if trace is not None:  # explain's hooks, loaded only for it
+        from medkit_replay.pipeline.tracing import Tracer  # noqa: PLC0415
+
+        tracer = Tracer(trace, timeline, router)
     tallies: dict[str, Tally] = {}  # bytes fetched from remote inputs, both passes
     run = replay_pass(
         paths,
