@@ -397,6 +397,9 @@ class McapFile:
                 data = reader.read(base + start, stop - start)
             if len(data) != stop - start:
                 return None
+            prefix = starts[0] if not start else 0  # schema and channel records only
+            if prefix and self._declarations(memoryview(data)[:prefix]) != prefix:
+                return None
             k = bisect_left(starts, start, k)  # past the rest of a skipped run
             while k < count and starts[k] < stop:
                 inner, end = starts[k], ends[k]
@@ -433,6 +436,8 @@ class McapFile:
         the chunks between are read, so no channel's classification is settled by it."""
         if len(head) != PLAIN_CHUNK_HEAD or not _plain(head):
             return None
+        if not chunk.channels <= self.connections.keys():
+            return None  # declared inside the chunk: read it whole (its wanted flags unknown)
         size = _CHUNK_HEAD.unpack_from(head)[4]
         return plan_chunk(chunk, size, index, self._peek if ahead else self._wants)
 
@@ -591,15 +596,18 @@ class McapFile:
     def _plain_records(self, records: memoryview, pos: int, count: bool) -> list[Timed[Raw]] | None:
         """:meth:`_chunk_records` for the common case: message records only, all intact.
 
-        None at the first record that is not (damage, a schema or channel inside the chunk):
-        the careful parser then reads the chunk from its start.
+        Schema and channel records before the first message are taken in. None at the first
+        record that is not (damage, a schema or channel between messages): the careful parser
+        then reads the chunk from its start.
         """
         timed: list[Timed[Raw]] = []
         seen: list[tuple[int, int]] = []
         size = len(records)
         unpack = _MESSAGE_HEAD.unpack_from
         wants, connections, file_no = self._wants, self.connections, self.file_no
-        at = 0
+        at = self._declarations(records)
+        if at is None:
+            return None
         while at < size:
             if at + _MESSAGE_HEAD.size > size:
                 return None
@@ -621,6 +629,21 @@ class McapFile:
         for cid, t_ns in seen:
             self._count(cid, t_ns)
         return timed
+
+    def _declarations(self, records: memoryview) -> int | None:
+        """Take in the schema and channel records a chunk's records start with; where the
+        first other record starts (None: one of them is damaged)."""
+        at, size = 0, len(records)
+        while at + 9 <= size and records[at] in (OP_SCHEMA, OP_CHANNEL):
+            end = at + 9 + int.from_bytes(records[at + 1 : at + 9], "little")
+            if end > size:
+                return None
+            try:
+                self._parse_records(bytes(records[at + 9 : end]), records[at])
+            except _DamageError:
+                return None
+            at = end
+        return at
 
     def _chunk_records(
         self, records: memoryview, pos: int, count: bool

@@ -69,8 +69,9 @@ def plan_chunk(
     None when it cannot (an irregular index) or does not pay (most of it is wanted).
 
     The index must hold one record per channel the summary's chunk index names, and its
-    entries must tile the records from the first byte; the pieces then hold every wanted
-    record whole and, of each run of unwanted records skipped, the first record's header.
+    entries must tile the records from the first message on; the pieces then hold what comes
+    before it (schema and channel records), every wanted record whole and, of each run of
+    unwanted records skipped, the first record's header.
     """
     total = len(index)
     keys: list[int] = []  # offset << 16 | channel id, per message record
@@ -97,9 +98,7 @@ def plan_chunk(
     if not keys or total != chunk.index_length or seen != chunk.channels:
         return None
     keys.sort()
-    starts = [key >> 16 for key in keys]
-    if starts[0] != 0:
-        return None  # something other than a message comes first: not ours to skip
+    starts = [key >> 16 for key in keys]  # before the first: schemas and channels (read)
     channels = [key & 0xFFFF for key in keys]
     ends = [*starts[1:], size]
     if min(map(sub, ends, starts)) < PAYLOAD_AT:

@@ -92,6 +92,7 @@ class RemoteRanges:
         self._pending: list[tuple[int, int]] = []
         self._blocks: dict[int, _Block] = {}  # by start, oldest first
         self._starts: list[int] = []  # sorted
+        self._users: dict[Future[list[Bytes]], int] = {}  # blocks held of each batch
         self._held = 0
 
     def _covering(self, start: int, end: int) -> tuple[int, _Block] | None:
@@ -125,24 +126,34 @@ class RemoteRanges:
             batch = fresh[first : first + BATCH_RANGES]
             starts, ends = [start for start, _ in batch], [end for _, end in batch]
             fetch = self._pool.submit(self._remote.fetch_many, starts, ends, self._stop)
+            self._users[fetch] = len(batch)
             for slot, (start, end) in enumerate(batch):
                 self._blocks[start] = _Block(end, fetch, slot)
                 insort(self._starts, start)
                 self._held += end - start
         while self._held > READ_AHEAD_LIMIT and len(self._starts) > 1:
-            self._drop(next(iter(self._blocks)))
+            oldest = next(iter(self._blocks))
+            self._release(oldest)
+            self._starts.remove(oldest)
 
-    def _drop(self, start: int) -> None:
+    def _release(self, start: int) -> None:
+        """Let the block at ``start`` go (its start stays in ``_starts``: the caller's)."""
         block = self._blocks.pop(start)
-        self._starts.remove(start)
         self._held -= block.end - start
-        if not any(other.batch is block.batch for other in self._blocks.values()):
+        self._users[block.batch] -= 1
+        if not self._users[block.batch]:
+            del self._users[block.batch]
             block.batch.cancel()  # nothing else waits for it: not asked for, if not yet
 
     def forget(self, before: int) -> None:
-        for start in self._starts[: bisect_right(self._starts, before)]:
+        cut = bisect_right(self._starts, before)
+        kept = []
+        for start in self._starts[:cut]:
             if self._blocks[start].end <= before:
-                self._drop(start)
+                self._release(start)
+            else:
+                kept.append(start)
+        self._starts[:cut] = kept
 
     def _served(self, found: tuple[int, _Block] | None, offset: int, end: int) -> bytes | None:
         if found is None or found[1].batch.cancelled():
@@ -186,6 +197,7 @@ class RemoteRanges:
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._blocks.clear()
         self._starts.clear()
+        self._users.clear()
         self._held = 0
 
 
