@@ -37,6 +37,7 @@ class Served:
     drop_next: int = 0  # this many next GETs send half their body and close the connection
     delay_s: float = 0.0  # wait before each GET's body (a slow link)
     seen: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # method, headers
+    ranges: list[tuple[str, int, int]] = field(default_factory=list)  # GETs: path, start, end
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
@@ -97,6 +98,9 @@ class _Handler(BaseHTTPRequestHandler):
             start = int(match[1])
             end = min(size - 1, int(match[2])) if match[2] else size - 1
             status = 206
+            if body:
+                with self.served.lock:
+                    self.served.ranges.append((relative, start, end + 1))
         length = end - start + 1 if size else 0
         self.send_response(status)
         self.send_header("Content-Length", str(length))

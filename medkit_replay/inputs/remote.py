@@ -52,11 +52,11 @@ if TYPE_CHECKING:
 BATCHES = 4
 """Batches of range requests in flight at once for one file (each sends its requests
 concurrently, up to ten at a time)."""
-BATCH_RANGES = 64
+BATCH_RANGES = 128
 """Most ranges asked for in one batch."""
 COALESCE_GAP = 4 * 1024
-"""Wanted ranges this close are fetched as one request (the gap is fetched too): on loopback
-a request costs about what 40 KB do, in S3's prices what 4 KB do."""
+"""Wanted ranges this close are fetched as one request (the gap is fetched too): in S3's
+prices a request costs what 4 KB do (see mcap_plan.SKIP_AT_LEAST)."""
 MAX_REQUEST = 8 * 1024 * 1024
 """Coalescing stops at this many bytes per request."""
 READ_AHEAD_LIMIT = 64 * 1024 * 1024
