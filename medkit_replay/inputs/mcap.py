@@ -3,8 +3,11 @@
 Read-only and bounded: a length field is obeyed only within the file and RECORD_SIZE_LIMIT.
 Bytes come through a RangeReader (inputs.ranges): a local file or a remote object alike.
 Uncompressed chunks without a checksum are read through their message indexes when that skips
-most of their bytes (only the wanted records are read); anything irregular falls back to reading
-the whole chunk, so what is delivered never depends on the route taken.
+most of their bytes (only the wanted records are read, and the first header of each run of other
+records skipped: inputs.mcap_plan); anything irregular in what is read falls back to reading the
+whole chunk, so what is delivered never depends on the route taken. The records inside a skipped
+run are taken to be what the message index (checked against the summary) says they are, as a
+chunk without a wanted topic is never read: damage there goes unseen on both counts.
 """
 
 from __future__ import annotations
@@ -305,15 +308,21 @@ class McapFile:
         """Whether a chunk may hold a wanted message (an index listing no channel: maybe)."""
         return not chunk.channels or any(self._wants(cid) for cid in chunk.channels)
 
+    def _may_want(self, chunk: ChunkIndex) -> bool:
+        """:meth:`_has_wanted` before the chunks are read (a channel not declared yet: maybe)."""
+        return not chunk.channels or any(self._wanted.get(cid, True) for cid in chunk.channels)
+
     def _read_indexed(
         self, reader: RangeReader, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         # Chunks without a wanted topic are never read. Reading by index is many small
         # reads; from a cold disk or over the network each would wait its turn, so the next
         # chunks' heads, indexes and pieces are asked for ahead while this one is decoded.
-        chunks = [chunk for chunk in self._chunks or [] if self._has_wanted(chunk)]
+        chunks = [chunk for chunk in self._chunks or [] if self._may_want(chunk)]
         ahead = ReadAhead(chunks, self._plan_ahead, self._data_end) if self.indexed else None
         for number, chunk in enumerate(chunks):
+            if not self._has_wanted(chunk):
+                continue  # (a channel declared inside an earlier chunk is not wanted)
             reader.forget(chunk.offset)
             if ahead is not None and (reader.always_ahead or self._cold):
                 ahead.advance(reader, number)
@@ -446,10 +455,7 @@ class McapFile:
 
     def _peek(self, cid: int) -> bool:
         """:meth:`_wants` without keeping the answer (a channel may yet be declared)."""
-        if cid in self._wanted:
-            return self._wanted[cid]
-        connection = self.connections.get(cid)
-        return connection is not None and self._accept(connection)
+        return self._wanted.get(cid, False)
 
     def _read_linear(
         self, bio: BinaryIO, cap: int

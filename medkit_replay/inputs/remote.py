@@ -202,9 +202,11 @@ class RemoteRanges:
 
 
 class _AheadStream(RangeStream):
-    """A remote object read from the start, asking for the next block while this one is used."""
+    """A remote object read from the start, asking for the next block while this one is used
+    (the blocks before it are let go)."""
 
     def readinto(self, buffer: memoryview) -> int:  # type: ignore[override]
+        self._reader.forget(self.tell())
         got = super().readinto(buffer)
         self._reader.will_need(self.tell(), min(len(buffer), STREAM_BLOCK))
         return got
