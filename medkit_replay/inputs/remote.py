@@ -11,7 +11,7 @@ from __future__ import annotations
 import io
 import threading
 from bisect import bisect_right, insort
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 from dataclasses import replace
 from pathlib import Path, PurePosixPath
 from tempfile import TemporaryDirectory
@@ -156,10 +156,14 @@ class RemoteRanges:
         self._starts[:cut] = kept
 
     def _served(self, found: tuple[int, _Block] | None, offset: int, end: int) -> bytes | None:
-        if found is None or found[1].batch.cancelled():
+        if found is None:
             return None
         start, block = found
-        return bytes(memoryview(block.batch.result()[block.slot])[offset - start : end - start])
+        try:
+            parts = block.batch.result()
+        except CancelledError:  # let go before it was sent
+            return None
+        return bytes(memoryview(parts[block.slot])[offset - start : end - start])
 
     def read(self, offset: int, length: int) -> bytes:
         end = min(self.size, offset + max(0, length))
