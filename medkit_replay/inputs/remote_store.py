@@ -195,7 +195,6 @@ class Tally:
     def __init__(self, display: str) -> None:
         self.display = display
         self.fetched = 0
-        self.requests = 0  # ranges asked for (a server may see fewer: adjacent ones merge)
         self.sizes: dict[str, int] = {}  # object key -> size
         self._lock = threading.Lock()
 
@@ -204,10 +203,9 @@ class Tally:
         """Bytes of the objects read (each counted once)."""
         return sum(self.sizes.values())
 
-    def add(self, count: int, requests: int = 1) -> None:
+    def add(self, count: int) -> None:
         with self._lock:
             self.fetched += count
-            self.requests += requests
 
 
 class RemoteObject:
@@ -274,7 +272,7 @@ class RemoteObject:
                 if final:
                     raise self._fail(problem) from None
                 continue
-            self.tally.add(sum(map(len, parts)), len(todo))
+            self.tally.add(sum(map(len, parts)))
             short = []
             for k, part in zip(todo, parts, strict=True):
                 if len(part) == ends[k] - starts[k]:

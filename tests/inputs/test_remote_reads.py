@@ -172,6 +172,21 @@ def test_a_batch_with_a_dropped_connection_is_asked_again(tmp_path: Path) -> Non
     assert line == f"{base}/run.mcap: connection failed; gave up after 5 tries"
 
 
+def test_an_object_cut_short_while_it_is_read_fails_in_one_line(tmp_path: Path) -> None:
+    data = bytes(range(256)) * 400
+    (tmp_path / "run.mcap").write_bytes(data)
+    with range_server(tmp_path) as (base, _served):
+        obj, reader = reader_of(base, "run.mcap")
+        for start in (0, 50_000, 100_000):
+            reader.will_need(start, 1_000)
+        (tmp_path / "run.mcap").write_bytes(data[:100_500])  # replaced by a shorter upload
+        with reader:
+            batch = message_of(lambda: reader.read(100_000, 1_000))
+        single = message_of(lambda: obj.fetch(100_000, 101_000))
+    assert batch == single
+    assert batch == f"{base}/run.mcap: the server sent 500 of 1000 bytes; gave up after 5 tries"
+
+
 def test_what_is_asked_ahead_stays_within_its_bound(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
