@@ -322,7 +322,7 @@ class McapFile:
         ahead = ReadAhead(chunks, self._plan_ahead, self._data_end) if self.indexed else None
         for number, chunk in enumerate(chunks):
             if not self._has_wanted(chunk):
-                continue  # (a channel declared inside an earlier chunk is not wanted)
+                continue  # no wanted topic in it, now that it is known: never read
             reader.forget(chunk.offset)
             if ahead is not None and (reader.always_ahead or self._cold):
                 ahead.advance(reader, number)
