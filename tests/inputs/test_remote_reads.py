@@ -8,6 +8,7 @@ ahead stays within its bound, and the report is the local one whatever is let go
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING
 
 import pytest
@@ -170,6 +171,21 @@ def test_a_batch_with_a_dropped_connection_is_asked_again(tmp_path: Path) -> Non
         with reader:
             line = message_of(lambda: reader.read(9_000, 100))
     assert line == f"{base}/run.mcap: connection failed; gave up after 5 tries"
+
+
+def test_a_batch_still_asking_again_stops_when_told(tmp_path: Path) -> None:
+    # The reader sets its stop event when closed (Ctrl-C, an error): a batch between tries
+    # then tries no more.
+    (tmp_path / "run.mcap").write_bytes(bytes(range(256)) * 400)
+    stop = threading.Event()
+    with range_server(tmp_path) as (base, served):
+        obj, _ = reader_of(base, "run.mcap")
+        served.drop_next = 10**6
+        timer = threading.Timer(0.15, stop.set)  # during the wait before the second or third try
+        timer.start()
+        line = message_of(lambda: obj.fetch_many([0, 9_000], [4_000, 13_000], stop))
+        timer.join()
+    assert line == f"{base}/run.mcap: reading stopped"
 
 
 def test_an_object_cut_short_while_it_is_read_fails_in_one_line(tmp_path: Path) -> None:
