@@ -19,7 +19,7 @@ import threading
 import time
 import urllib.request
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -53,6 +53,7 @@ class Served:
     drop_next: int = 0  # this many next GETs send half their body and close the connection
     delay_s: float = 0.0  # wait before each GET's body (a slow link)
     seen: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # method, headers
+    ranges: list[tuple[str, int, int]] = field(default_factory=list)  # GETs: path, start, end
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
@@ -78,7 +79,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Content-Length", str(len(body)))
         self.end_headers()
         if self.command != "HEAD":
-            self.wfile.write(body)
+            with suppress(ConnectionError):  # the client gave up on a batch at its first refusal
+                self.wfile.write(body)
 
     def do_HEAD(self) -> None:
         self._serve(body=False)
@@ -113,6 +115,9 @@ class _Handler(BaseHTTPRequestHandler):
             start = int(match[1])
             end = min(size - 1, int(match[2])) if match[2] else size - 1
             status = 206
+            if body:
+                with self.served.lock:
+                    self.served.ranges.append((relative, start, end + 1))
         length = end - start + 1 if size else 0
         self.send_response(status)
         self.send_header("Content-Length", str(length))

@@ -284,6 +284,8 @@ PURE_INPUT_MODULES = {
     "rosbag1_records.py": set(),
     "ros1_messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
     "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
+    # MCAP chunks read by index: the plan of a chunk and the read-ahead window (hints only).
+    "mcap_plan.py": set(),
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""
 

@@ -3,19 +3,31 @@
 Read-only and bounded: a length field is obeyed only within the file and RECORD_SIZE_LIMIT.
 Bytes come through a RangeReader (inputs.ranges): a local file or a remote object alike.
 Uncompressed chunks without a checksum are read through their message indexes when that skips
-most of their bytes (only the wanted records are read); anything irregular falls back to reading
-the whole chunk, so what is delivered never depends on the route taken.
+most of their bytes (only the wanted records are read, and the first header of each run of other
+records skipped: inputs.mcap_plan); anything irregular in what is read falls back to reading the
+whole chunk, so what is delivered never depends on the route taken. The records inside a skipped
+run are taken to be what the message index (checked against the summary) says they are, as a
+chunk without a wanted topic is never read: damage there goes unseen on both counts.
 """
 
 from __future__ import annotations
 
 from binascii import crc32
-from functools import cache
-from operator import itemgetter, sub
+from bisect import bisect_left
+from operator import itemgetter
 from struct import Struct
-from typing import TYPE_CHECKING, BinaryIO, NamedTuple
+from typing import TYPE_CHECKING, BinaryIO
 
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
+from medkit_replay.inputs.mcap_plan import (
+    PAYLOAD_AT,
+    PLAIN_CHUNK_HEAD,
+    RECORD_HEAD,
+    ChunkIndex,
+    Plan,
+    ReadAhead,
+    plan_chunk,
+)
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
@@ -37,23 +49,11 @@ OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = (
     0x06,
 )
 OP_CHUNK_INDEX, OP_STATISTICS, OP_DATA_END = 0x08, 0x0B, 0x0F
-OP_MESSAGE_INDEX = 0x07
 FOOTER_SIZE = 9 + 20 + len(MAGIC)
 MESSAGE_HEADER = 22  # channel id, sequence, log time, publish time
-PAYLOAD_AT = 9 + MESSAGE_HEADER  # a message record's payload, from the record's first byte
-PLAIN_CHUNK_HEAD = 9 + 8 + 8 + 8 + 4 + 4 + 8  # an uncompressed chunk's bytes before its records
-SKIP_AT_LEAST = 16 * 1024
-"""An unwanted record this long is skipped when reading by index (only its header is read)."""
-
-PREFETCH = 4
-"""Chunks ahead whose heads and message indexes are asked for (read-ahead hints) while reading."""
-
 _CHUNK_HEAD = Struct("<BQQQQII")  # opcode, length, start, end, size, crc, compression length
 _U64 = Struct("<Q")
 _MESSAGE_HEAD = Struct("<BQHIQ")  # opcode, length, channel id, sequence, log time
-_RECORD_HEAD = Struct("<BQH")  # opcode, length, channel id (of a message record)
-_INDEX_HEAD = Struct("<BQHI")  # opcode, length, channel id, entries' byte length
-_INDEX_ENTRY = Struct("<QQ")  # log time, offset in the chunk's records
 _ORDER = itemgetter(0, 1)  # (log time, position) of a Timed
 _T_NS = itemgetter(0)  # log time of a Timed
 _SEEN_T_NS = itemgetter(1)  # log time of a (channel id, log time) pair
@@ -61,12 +61,6 @@ LOG_TIME_LIMIT = 2**63
 """Log times at or above it cannot come from ROS 2 (int64 nanoseconds): such a message is damage."""
 NO_FOOTER = "no footer (the recorder did not close the file)"
 _new = tuple.__new__  # builds a Timed or Raw from a tuple without its Python-level __new__
-
-
-@cache
-def _u64s(count: int) -> Callable[[bytes, int], tuple[int, ...]]:
-    """Unpacks ``count`` little-endian uint64 values in one call."""
-    return Struct(f"<{count}Q").unpack_from
 
 
 class _DamageError(Exception):
@@ -107,23 +101,11 @@ def _plain(head: bytes) -> bool:
     return bool(declared == size and 40 + size <= length)
 
 
-_Plan = tuple[list[int], list[int], list[int], list[bool], list[tuple[int, int]]]
-"""How a chunk is read by index: its records' starts, ends, channels, wanted flags, pieces."""
-
-
-class _ChunkIndex(NamedTuple):
-    start_ns: int
-    offset: int
-    length: int
-    channels: frozenset[int]
-    index_length: int = 0  # bytes of message index records after the chunk (0: unknown)
-
-
 _CHUNK_INDEX_HEAD = Struct("<QQQQI")  # start, end, chunk offset, chunk length, map length
 _CHUNK_INDEX_ENTRY = Struct("<HQ")  # channel id, message index offset
 
 
-def _chunk_index(body: memoryview) -> _ChunkIndex | None:
+def _chunk_index(body: memoryview) -> ChunkIndex | None:
     """A well-formed chunk index record, parsed in one go; None for the careful parser."""
     if len(body) < _CHUNK_INDEX_HEAD.size:
         return None
@@ -135,7 +117,7 @@ def _chunk_index(body: memoryview) -> _ChunkIndex | None:
         cid for cid, _ in _CHUNK_INDEX_ENTRY.iter_unpack(body[_CHUNK_INDEX_HEAD.size : end])
     )
     index_length = _U64.unpack_from(body, end)[0] if end + 8 <= len(body) else 0
-    return _ChunkIndex(start_ns, offset, length, channels, index_length)
+    return ChunkIndex(start_ns, offset, length, channels, index_length)
 
 
 class McapFile:
@@ -164,7 +146,7 @@ class McapFile:
         self.start_ns: int | None = None
         self.end_ns: int | None = None
         self._schemas: dict[int, tuple[str, Definition]] = {}
-        self._chunks: list[_ChunkIndex] | None = None
+        self._chunks: list[ChunkIndex] | None = None
         self._wanted: dict[int, bool] = {}
         self._unknown_channels = 0
         try:
@@ -236,9 +218,9 @@ class McapFile:
             self._chunks = sorted(indexes)
         return None
 
-    def _parse_summary(self, summary: bytes) -> tuple[list[_ChunkIndex], int | None]:
+    def _parse_summary(self, summary: bytes) -> tuple[list[ChunkIndex], int | None]:
         """Schemas, channels and statistics into self; returns chunk indexes and chunk count."""
-        indexes: list[_ChunkIndex] = []
+        indexes: list[ChunkIndex] = []
         chunk_count = None
         cur = _Cursor(summary)
         while cur.pos < len(summary):
@@ -262,7 +244,7 @@ class McapFile:
                 except _DamageError:
                     index_length = 0  # only an optimisation is lost
                 indexes.append(
-                    _ChunkIndex(start_ns, offset, length, frozenset(channels), index_length)
+                    ChunkIndex(start_ns, offset, length, frozenset(channels), index_length)
                 )
             elif op == OP_STATISTICS:
                 record.take(8 + 2 + 4 * 3)  # message, schema, channel, attachment, metadata counts
@@ -322,20 +304,28 @@ class McapFile:
             self._wanted[cid] = connection is not None and self._accept(connection)
         return self._wanted[cid]
 
-    def _has_wanted(self, chunk: _ChunkIndex) -> bool:
+    def _has_wanted(self, chunk: ChunkIndex) -> bool:
         """Whether a chunk may hold a wanted message (an index listing no channel: maybe)."""
         return not chunk.channels or any(self._wants(cid) for cid in chunk.channels)
+
+    def _may_want(self, chunk: ChunkIndex) -> bool:
+        """:meth:`_has_wanted` before the chunks are read (a channel not declared yet: maybe)."""
+        return not chunk.channels or any(self._wanted.get(cid, True) for cid in chunk.channels)
 
     def _read_indexed(
         self, reader: RangeReader, cap: int
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
-        chunks = self._chunks or []
-        ahead = 0  # chunks whose head and index are asked for already
+        # Chunks without a wanted topic are never read. Reading by index is many small
+        # reads; from a cold disk or over the network each would wait its turn, so the next
+        # chunks' heads, indexes and pieces are asked for ahead while this one is decoded.
+        chunks = [chunk for chunk in self._chunks or [] if self._may_want(chunk)]
+        ahead = ReadAhead(chunks, self._plan_ahead, self._data_end) if self.indexed else None
         for number, chunk in enumerate(chunks):
             if not self._has_wanted(chunk):
-                continue  # no wanted topic in it: its bytes are never read
-            if self.indexed and self._cold:  # the last chunk was not at hand: ask ahead
-                ahead = self._prefetch_heads(reader, chunks, max(ahead, number), number + PREFETCH)
+                continue  # no wanted topic in it, now that it is known: never read
+            reader.forget(chunk.offset)
+            if ahead is not None and (reader.always_ahead or self._cold):
+                ahead.advance(reader, number)
             head = reader.read(chunk.offset, PLAIN_CHUNK_HEAD)
             length = int.from_bytes(head[1:9], "little") if len(head) >= 9 else -1
             if (
@@ -351,11 +341,8 @@ class McapFile:
             yield Bound(min(chunk.start_ns, cap))
             timed = None
             if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
-                following = next(
-                    (c for c in chunks[number + 1 : number + 1 + PREFETCH] if self._has_wanted(c)),
-                    None,
-                )
-                timed = self._by_index(reader, chunk, head, following)
+                plan = ahead.plans.pop(number, None) if ahead is not None else None
+                timed = self._by_index(reader, chunk, head, plan)
             if timed is None:
                 body = self._read_into_buffer(reader, chunk.offset + 9, length)
                 yield from self._chunk(body, chunk.offset, cap, count=False)
@@ -363,23 +350,6 @@ class McapFile:
                 timed.sort(key=_ORDER)
                 yield Bound(min(timed[0].t_ns, cap))
                 yield timed
-
-    def _prefetch_heads(
-        self, reader: RangeReader, chunks: list[_ChunkIndex], start: int, stop: int
-    ) -> int:
-        """Ask ahead for the heads and message indexes of chunks ``start:stop`` (no wait).
-
-        Reading by index is many small reads; from a cold disk or over the network each would
-        wait its turn, so the next chunks' small parts are requested ahead while this one is
-        decoded. A hint only: ranges outside the file are not asked for.
-        """
-        for chunk in chunks[start:stop]:
-            if chunk.channels and not any(self._wants(cid) for cid in chunk.channels):
-                continue
-            reader.will_need(chunk.offset, PLAIN_CHUNK_HEAD)
-            if chunk.index_length:
-                reader.will_need(chunk.offset + chunk.length, chunk.index_length)
-        return max(start, min(stop, len(chunks)))
 
     def _read_into_buffer(self, reader: RangeReader, offset: int, length: int) -> memoryview:
         """``length`` bytes at ``offset`` (fewer at the end of the file) in the reused buffer.
@@ -394,38 +364,39 @@ class McapFile:
     def _by_index(
         self,
         reader: RangeReader,
-        chunk: _ChunkIndex,
+        chunk: ChunkIndex,
         head: bytes,
-        following: _ChunkIndex | None = None,
+        plan: Plan | None = None,
     ) -> list[Timed[Raw]] | None:
         """The wanted messages of an uncompressed chunk, read through its message indexes.
 
-        Only the wanted records and the headers of the skipped ones are read. None when that
-        does not pay (most of the chunk is wanted) or anything is irregular: a compressed or
-        checksummed chunk, an index that does not tile the chunk's records exactly with
-        message records, a skipped record of a wanted channel. The whole chunk is then read,
-        so both routes deliver the same messages.
-
-        When these bytes were not at hand, the pieces of ``following`` (the next chunk to
-        read) are asked for too if its head and index are: they arrive while this one is used.
+        Only the wanted records and the first header of each run of other records skipped
+        are read (:func:`~medkit_replay.inputs.mcap_plan.plan_chunk`; ``plan``: made while
+        asking ahead). None when that does not pay (most of the chunk is wanted) or anything
+        read is irregular: a compressed or checksummed chunk, an index that does not tile the
+        chunk's records with message records or names other channels than the summary, a
+        record read that is not where and what the index says. The whole chunk is then read,
+        so both routes deliver the same messages (the records inside a skipped run are taken
+        to be what the index says, as chunks without a wanted topic are never read).
         """
         index_at = chunk.offset + chunk.length
         if not _plain(head) or index_at + chunk.index_length > self._data_end:
             return None
-        plan = self._plan(chunk, head, reader.read(index_at, chunk.index_length))
+        if plan is not None and plan.wanted != {c for c in chunk.channels if self._wants(c)}:
+            plan = None  # made ahead, before a channel was declared (inside an earlier chunk)
+        if plan is None:
+            plan = self._plan(chunk, head, reader.read(index_at, chunk.index_length))
         if plan is None:
             return None
-        starts, ends, channels, flags, pieces = plan
+        starts, ends, channels, flags, pieces, _ = plan
         base = chunk.offset + PLAIN_CHUNK_HEAD
         first = reader.cached(base + pieces[0][0], pieces[0][1] - pieces[0][0])
         self._cold = first is None
         if self._cold and len(pieces) > 1:  # not at hand: all pieces in flight at once
             for start, stop in pieces:
                 reader.will_need(base + start, stop - start)
-        if self._cold and following is not None:
-            self._plan_ahead(reader, following)
         timed: list[Timed[Raw]] = []
-        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, _RECORD_HEAD.unpack_from
+        unpack_message, unpack_head = _MESSAGE_HEAD.unpack_from, RECORD_HEAD.unpack_from
         connections, file_no, pos = self.connections, self.file_no, chunk.offset
         k, count = 0, len(starts)
         for start, stop in pieces:
@@ -435,6 +406,10 @@ class McapFile:
                 data = reader.read(base + start, stop - start)
             if len(data) != stop - start:
                 return None
+            prefix = starts[0] if not start else 0  # schema and channel records only
+            if prefix and self._declarations(memoryview(data)[:prefix]) != prefix:
+                return None
+            k = bisect_left(starts, start, k)  # past the rest of a skipped run
             while k < count and starts[k] < stop:
                 inner, end = starts[k], ends[k]
                 at = inner - start
@@ -463,74 +438,24 @@ class McapFile:
             return None  # the careful parser skips and reports it
         return timed
 
-    def _plan_ahead(self, reader: RangeReader, chunk: _ChunkIndex) -> None:
-        """Ask for the pieces of a chunk whose head and index are at hand (a hint only)."""
-        head = reader.cached(chunk.offset, PLAIN_CHUNK_HEAD)
-        index_at = chunk.offset + chunk.length
-        if head is None or len(head) != PLAIN_CHUNK_HEAD or not chunk.index_length:
-            return
-        if index_at + chunk.index_length > self._data_end:
-            return
-        index = reader.cached(index_at, chunk.index_length)
-        plan = self._plan(chunk, head, index) if index is not None else None
-        if plan is not None:
-            base = chunk.offset + PLAIN_CHUNK_HEAD
-            for start, stop in plan[-1]:
-                reader.will_need(base + start, stop - start)
-
-    def _plan(self, chunk: _ChunkIndex, head: bytes, index: bytes) -> _Plan | None:
-        """How to read an uncompressed chunk by its message index (see :meth:`_by_index`):
-        its records' starts, ends, channels and wanted flags, and the pieces to read; None
-        when it cannot or does not pay."""
-        if not _plain(head):
+    def _plan(
+        self, chunk: ChunkIndex, head: bytes, index: bytes, ahead: bool = False
+    ) -> Plan | None:
+        """How to read a chunk by its message index (None: read it whole); ``ahead``: before
+        the chunks between are read, so no channel's classification is settled by it."""
+        if len(head) != PLAIN_CHUNK_HEAD or not _plain(head):
             return None
+        if not chunk.channels <= self.connections.keys():
+            return None  # declared inside the chunk: read it whole (its wanted flags unknown)
         size = _CHUNK_HEAD.unpack_from(head)[4]
-        total = len(index)
-        keys: list[int] = []  # offset << 16 | channel id, per message record
-        at = 0
-        while at < total:
-            if at + _INDEX_HEAD.size > total:
-                return None
-            op, record_length, cid, entries_length = _INDEX_HEAD.unpack_from(index, at)
-            end = at + 9 + record_length
-            if (
-                op != OP_MESSAGE_INDEX
-                or record_length != 6 + entries_length
-                or entries_length % _INDEX_ENTRY.size
-                or end > total
-            ):
-                return None
-            if entries_length:
-                words = _u64s(entries_length >> 3)(index, at + _INDEX_HEAD.size)
-                keys += [offset << 16 | cid for offset in words[1::2]]  # (log time, offset)
-            at = end
-        if not keys or total != chunk.index_length:
-            return None
-        keys.sort()
-        starts = [key >> 16 for key in keys]
-        if starts[0] != 0:
-            return None  # something other than a message comes first: not ours to skip
-        channels = [key & 0xFFFF for key in keys]
-        ends = [*starts[1:], size]
-        extents = list(map(sub, ends, starts))
-        if min(extents) < PAYLOAD_AT:
-            return None
-        wanted = self._wanted
-        flags = [wanted[cid] if cid in wanted else self._wants(cid) for cid in channels]
-        skipped = [
-            k for k, extent in enumerate(extents) if extent >= SKIP_AT_LEAST and not flags[k]
-        ]
-        skipped_bytes = sum(extents[k] - _RECORD_HEAD.size for k in skipped)
-        if 2 * (size - skipped_bytes) > size:
-            return None  # reading the whole chunk costs about the same
-        pieces: list[tuple[int, int]] = []  # [start, end) in the records: all but skipped bodies
-        at = 0
-        for k in skipped:
-            pieces.append((at, starts[k] + _RECORD_HEAD.size))
-            at = ends[k]
-        if at < size:
-            pieces.append((at, size))
-        return starts, ends, channels, flags, pieces
+        return plan_chunk(chunk, size, index, self._peek if ahead else self._wants)
+
+    def _plan_ahead(self, chunk: ChunkIndex, head: bytes, index: bytes) -> Plan | None:
+        return self._plan(chunk, head, index, ahead=True)
+
+    def _peek(self, cid: int) -> bool:
+        """:meth:`_wants` without keeping the answer (a channel may yet be declared)."""
+        return self._wanted.get(cid, False)
 
     def _read_linear(
         self, bio: BinaryIO, cap: int
@@ -677,15 +602,18 @@ class McapFile:
     def _plain_records(self, records: memoryview, pos: int, count: bool) -> list[Timed[Raw]] | None:
         """:meth:`_chunk_records` for the common case: message records only, all intact.
 
-        None at the first record that is not (damage, a schema or channel inside the chunk):
-        the careful parser then reads the chunk from its start.
+        Schema and channel records before the first message are taken in. None at the first
+        record that is not (damage, a schema or channel between messages): the careful parser
+        then reads the chunk from its start.
         """
         timed: list[Timed[Raw]] = []
         seen: list[tuple[int, int]] = []
         size = len(records)
         unpack = _MESSAGE_HEAD.unpack_from
         wants, connections, file_no = self._wants, self.connections, self.file_no
-        at = 0
+        at = self._declarations(records)
+        if at is None:
+            return None
         while at < size:
             if at + _MESSAGE_HEAD.size > size:
                 return None
@@ -707,6 +635,21 @@ class McapFile:
         for cid, t_ns in seen:
             self._count(cid, t_ns)
         return timed
+
+    def _declarations(self, records: memoryview) -> int | None:
+        """Take in the schema and channel records a chunk's records start with; where the
+        first other record starts (None: one of them is damaged)."""
+        at, size = 0, len(records)
+        while at + 9 <= size and records[at] in (OP_SCHEMA, OP_CHANNEL):
+            end = at + 9 + int.from_bytes(records[at + 1 : at + 9], "little")
+            if end > size:
+                return None
+            try:
+                self._parse_records(bytes(records[at + 9 : end]), records[at])
+            except _DamageError:
+                return None
+            at = end
+        return at
 
     def _chunk_records(
         self, records: memoryview, pos: int, count: bool

@@ -29,6 +29,9 @@ class RangeReader(Protocol):
     """Random access to one file's bytes; a context manager that releases what it holds."""
 
     size: int
+    always_ahead: bool
+    """Whether every read waits unless asked ahead (a network), so a reader should keep asking
+    ahead even when the last bytes were at hand; False: only when they were not (a disk)."""
 
     def read(self, offset: int, length: int) -> bytes:
         """``length`` bytes at ``offset``; fewer only where the file ends."""
@@ -44,6 +47,10 @@ class RangeReader(Protocol):
 
     def will_need(self, offset: int, length: int) -> None:
         """A hint: these bytes will be read soon (ranges outside the file are ignored)."""
+        ...
+
+    def forget(self, before: int) -> None:
+        """A hint: bytes before this offset will not be read again (what is held may go)."""
         ...
 
     def __enter__(self) -> Self: ...
@@ -83,6 +90,8 @@ class LocalSource:
 
 class LocalRanges:
     """:class:`RangeReader` over an open local file."""
+
+    always_ahead = False
 
     def __init__(self, path: Path) -> None:
         self._file = path.open("rb", buffering=0)
@@ -128,6 +137,9 @@ class LocalRanges:
         if _fadvise is not None and offset >= 0 and 0 < length <= self.size - offset:
             with suppress(OSError):
                 _fadvise(self._fd, offset, length, _WILLNEED)
+
+    def forget(self, before: int) -> None:
+        """Nothing held: the page cache keeps what it will."""
 
     def __enter__(self) -> Self:
         return self
