@@ -59,13 +59,16 @@ class JsonAhead:
         self._closing = False
         self._thread: threading.Thread | None = None
         self._failed = False
-        self._done: dict[tuple[int, int], tuple[int, int]] | None = None
+        self._sent: set[tuple[int, int]] = set()  # chunks handed to the writer thread
+        self._done: dict[tuple[int, int], tuple[int, int]] = {}  # answered: (offset, length)
+        self._finished = False  # nothing more is sent
+        self._ended = False  # the child's answers are all read
 
     # -- while the replay runs -----------------------------------------------------------
 
     def spilled(self, spool: Spool[Any], index: int, data: bytes, /) -> None:
         """Send a spilled chunk of one of the report's long lists to the child."""
-        if self._failed or self._done is not None:
+        if self._failed or self._finished:
             return
         known = self._lists.get(id(spool))
         if known is None:
@@ -83,6 +86,7 @@ class JsonAhead:
                 return  # the child is behind: this chunk is encoded at the end instead
             self._queue.append(frame)
             self._queued += len(frame)
+            self._sent.add((known[0], index))
             self._lock.notify()
 
     def _start(self) -> bool:
@@ -132,40 +136,61 @@ class JsonAhead:
     # -- when the report is written --------------------------------------------------------
 
     def encoded(self, spool: Spool[Any], index: int, /) -> bytes | None:
-        """Chunk ``index`` of ``spool`` as report lines, or None when the child has not it."""
-        done = self.finish()
+        """Chunk ``index`` of ``spool`` as report lines, or None when the child has not it.
+
+        Waits for that chunk only: the child may still be encoding later ones meanwhile.
+        """
+        self.finish()
         known = self._lists.get(id(spool))
         if known is None or known[1] is not spool or self._file is None:
             return None
-        where = done.get((known[0], index))
+        key = (known[0], index)
+        while key not in self._done and key in self._sent and self._answer():
+            pass
+        where = self._done.get(key)
         if where is None:
             return None
         offset, length = where
         data = os.pread(self._file.fileno(), length, offset)
         return data if len(data) == length else None
 
-    def finish(self) -> dict[tuple[int, int], tuple[int, int]]:
-        """Wait for the child to encode what it was sent; what it finished, by chunk. Call it
-        before forking: the child's stdin must be closed here alone for it to see the end."""
-        if self._done is not None:
-            return self._done
-        self._done = {}
-        child = self._child
-        if child is None:
-            return self._done
+    def finish(self) -> None:
+        """Send nothing more: the child encodes what it has and ends. Call it before forking
+        (the child's stdin must be closed here alone for it to see its end)."""
+        if self._finished:
+            return
+        self._finished = True
         with self._lock:
             self._closing = True
             self._lock.notify()
         if self._thread is not None:
             self._thread.join()
-        assert child.stdout is not None
-        answers = child.stdout.read()
-        if child.wait() != 0 or self._failed:
-            return self._done  # nothing from a child that failed: all encoded here
-        for at in range(0, len(answers) - _DONE.size + 1, _DONE.size):
-            number, index, offset, length = _DONE.unpack_from(answers, at)
+
+    def delivered(self) -> dict[tuple[int, int], tuple[int, int]]:
+        """Every chunk the child encoded, (list number, index) -> (offset, length), once it
+        has ended."""
+        self.finish()
+        while self._answer():
+            pass
+        return dict(self._done)
+
+    def _answer(self) -> bool:
+        """Take the child's next answer; False at its end (then it is waited for).
+
+        An answer is written only once its lines are whole in the file, so each one holds
+        even if the child fails later.
+        """
+        child = self._child
+        if child is None or child.stdout is None or self._ended:
+            return False
+        data = child.stdout.read(_DONE.size)
+        if len(data) == _DONE.size:
+            number, index, offset, length = _DONE.unpack(data)
             self._done[(number, index)] = (offset, length)
-        return self._done
+            return True
+        self._ended = True
+        child.wait()
+        return False
 
     def close(self) -> None:
         """Stop the child (if still running) and release the file."""
@@ -221,6 +246,7 @@ def _child(fd: int) -> int:
         if written != len(lines):
             return 2
         answers.write(_DONE.pack(number, index, offset, len(lines)))
+        answers.flush()  # the parent may be waiting for this very chunk
         offset += len(lines)
     answers.flush()
     return 0
