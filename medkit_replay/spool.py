@@ -115,6 +115,11 @@ class Spool(Sequence[T], Generic[T]):
         if len(self._tail) >= self._chunk_size:
             self._spill()
 
+    def spill(self) -> None:
+        """Spill the records in memory now, however few (a listener then has every record)."""
+        if self._tail:
+            self._spill()
+
     def _spill(self) -> None:
         tail = self._tail
         if self._codec is not None:

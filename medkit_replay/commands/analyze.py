@@ -198,8 +198,14 @@ def write_reports(
                     f"cannot write {output.label}: {err.strerror or err}", path=str(target)
                 ) from None
 
+    summary = sys.stderr if json_out == "-" else sys.stdout
+    text = None
     # With a JSON report to write as well, the other outputs are written meanwhile by a child.
     with Forked(others) if json_out is not None and chosen else nullcontext():
+        if not quiet:  # drawn now, while the children work; printed once all is written
+            from medkit_replay.outputs.terminal import summary_text  # noqa: PLC0415
+
+            text = summary_text(result, summary)
         if json_out == "-":
             with standard_output("the report"):
                 write_report_stdout(result, ahead)
@@ -212,14 +218,12 @@ def write_reports(
                 ) from None
     if json_out is None or not chosen:
         others()
-    if not quiet:
-        from medkit_replay.outputs.terminal import print_summary  # noqa: PLC0415
-
-        if json_out == "-":
-            print_summary(result, sys.stderr)
+    if text is not None:
+        if summary is sys.stderr:
+            summary.write(text)
         else:
             with standard_output("the summary"):
-                print_summary(result, sys.stdout)
+                summary.write(text)
 
 
 def refuse_inside_inputs(directory: Path, inputs: Sequence[Path]) -> None:

@@ -103,9 +103,15 @@ def draw(console: Console, renderable: RenderableType) -> None:
     if console.is_terminal:
         console.print(renderable)
         return
+    console.file.write(drawn(console, renderable))
+
+
+def drawn(console: Console, renderable: RenderableType) -> str:
+    """What :func:`draw` would print, as text to print later (plain unless on a terminal)."""
     with console.capture() as capture:
         console.print(renderable)
-    console.file.write(strip_trailing(capture.get()))
+    text = capture.get()
+    return text if console.is_terminal else strip_trailing(text)
 
 
 def echo(text: str, stream: TextIO | None = None) -> None:

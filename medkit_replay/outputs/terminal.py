@@ -21,7 +21,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.outputs.console import draw, literal_console, plain_text
+from medkit_replay.outputs.console import draw, drawn, literal_console, plain_text
 from medkit_replay.text import WARNING_CAP, clip, printable, seconds, severity_name
 
 if TYPE_CHECKING:
@@ -447,3 +447,9 @@ def print_summary(result: Result, stream: TextIO | None = None) -> None:
     """
     console = literal_console(stream or sys.stdout)
     draw(console, summary_renderable(result, console.width))
+
+
+def summary_text(result: Result, stream: TextIO) -> str:
+    """The summary as :func:`print_summary` would draw it on ``stream``, to print later."""
+    console = literal_console(stream)
+    return drawn(console, summary_renderable(result, console.width))

@@ -210,6 +210,12 @@ def replay(
     if router.services.responses:
         parity = parity if parity is not None else {}
         parity["service_responses"] = compare_responses(router.services.responses, reports, clears)
+    if spill_listener is not None:
+        # A spool that spilled already hands the listener its last records too (one that
+        # never did is short: the report writes it at once).
+        for spool in (events, transitions, reports, clears):
+            if spool.batch_count > 1:
+                spool.spill()
     config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
     result = assemble_result(
         manager,
