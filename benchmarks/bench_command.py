@@ -198,6 +198,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-command-") as tmp:
         root = args.out or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
+        ENV.clear()  # the installed environment replaces this one: PYTHONDONTWRITEBYTECODE goes
         ENV.update(installed_env(Path(tmp) / "pycache"))
         warm = [
             *CLI,
