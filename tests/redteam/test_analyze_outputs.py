@@ -186,6 +186,30 @@ def test_a_full_standard_output_is_one_line(workspace: Path, extra: list[str], w
     ]
 
 
+CLI = [sys.executable, "-m", "medkit_replay.cli"]
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_a_full_standard_output_still_leaves_the_report_written(workspace: Path) -> None:
+    """The summary is drawn before the report is written and printed after: a standard output
+    that cannot take it is still said after the report and the page are in place."""
+    with Path("/dev/full").open("wb") as full:
+        done = subprocess.run(
+            [*CLI, "analyze", "run.jsonl", "--json", "r.json", "--html", "r.html"],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            cwd=workspace,
+            timeout=120,
+            check=False,
+        )
+    assert done.returncode == 2
+    assert done.stderr.decode().splitlines() == [
+        "medkit-replay: error: cannot write the summary to standard output: No space left on device"
+    ]
+    assert json.loads((workspace / "r.json").read_text())["faults"]
+    assert (workspace / "r.html").stat().st_size > 0
+
+
 def test_the_diff_is_never_written_over_a_side_or_a_config(workspace: Path) -> None:
     base = workspace / "base.json"
     made = run_limited(["analyze", "run.jsonl", "--json", base, "--quiet"], cwd=workspace)
