@@ -67,10 +67,12 @@ class _McapFile(_File):
         self.file = McapFile(path, 0, lambda _: None)
         self.file.warn = note  # damage met in a window: a note of the evidence
         if not self.file.chunk_indexed:
+            # Time windows are read through the chunk index only: a file without one would
+            # be scanned whole for every capture.
             problem = self.file.index_problem
-            if problem is None or problem == NO_FOOTER:
+            if problem == NO_FOOTER:
                 raise ValueError("no summary section (a truncated file?)")
-            raise ValueError(problem)
+            raise ValueError(problem or "no chunk index in its summary section")
         self.topics = {}
         for connection in self.file.connections.values():
             if not connection.msgtype or connection.serialization != "cdr":
