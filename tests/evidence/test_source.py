@@ -113,3 +113,13 @@ def test_a_truncated_file_is_not_read_for_evidence(tmp_path: Path) -> None:
     assert source.skipped == [
         f"{path}: not read for evidence: no summary section (a truncated file?)"
     ]
+
+
+def test_an_unchunked_file_is_not_read_for_evidence(tmp_path: Path) -> None:
+    # Windows are read through the chunk index; without one every capture would scan the file.
+    path = write_mcap(tmp_path / "m.mcap", [(1_000, "/tf", b"x")], chunked=False)
+    source = EvidenceSource([path])
+    source.close()
+    assert source.skipped == [
+        f"{path}: not read for evidence: no chunk index in its summary section"
+    ]

@@ -273,12 +273,17 @@ def write_mcap(
     compression: str = "none",
     chunk_size: int = 8_000,
     crcs: bool = False,
+    chunked: bool = True,
 ) -> Path:
     """A bare MCAP file written by the mcap library, messages in the order given (not sorted:
     chunks may then overlap in time), on TOPICS, their payloads as given."""
     with path.open("wb") as stream:
         writer = PlainWriter(
-            stream, chunk_size=chunk_size, compression=COMPRESSIONS[compression], enable_crcs=crcs
+            stream,
+            chunk_size=chunk_size,
+            compression=COMPRESSIONS[compression],
+            enable_crcs=crcs,
+            use_chunking=chunked,
         )
         writer.start(profile="ros2")
         schema = writer.register_schema("std_msgs/msg/String", "ros2msg", b"string data")
