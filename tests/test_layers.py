@@ -286,6 +286,8 @@ PURE_INPUT_MODULES = {
     "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
     # MCAP chunks read by index: the plan of a chunk and the read-ahead window (hints only).
     "mcap_plan.py": set(),
+    # MCAP time windows: which chunks, and their messages merged in log-time order.
+    "mcap_window.py": {"medkit_replay.inputs.mcap_plan", "medkit_replay.inputs.merge"},
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""
 

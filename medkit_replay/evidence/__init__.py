@@ -120,8 +120,6 @@ def _gather(
     plan: Plan, config: SnapshotConfig, options: EvidenceOptions, source: EvidenceSource
 ) -> Evidence:
     notes = list(plan.notes)
-    if source.skipped:
-        notes.append("evidence could not be read from: " + "; ".join(source.skipped))
     snapshots = freeze_frames(plan, config, source)
     recordings: list[EvidenceRecording] = []
     directory = options.directory
@@ -153,4 +151,6 @@ def _gather(
             raise MedkitReplayError(
                 f"cannot write recording: {err.strerror or err}", path=str(target)
             ) from None
+    if source.skipped:  # after the reads: damage met inside a capture's window is listed too
+        notes.append("evidence could not be read from: " + "; ".join(source.skipped))
     return Evidence(snapshots, tuple(recordings), tuple(notes))

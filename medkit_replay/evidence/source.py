@@ -1,7 +1,8 @@
 """Raw messages of a recording by topic and time range, for the captures' second pass.
 
-MCAP files are read through their chunk and message indexes, sqlite3 files by ranged queries on
-the timestamp index; nothing is decoded here and nothing of the recording is held in memory.
+MCAP files are read by the replay's reader (inputs.mcap) through their chunk and message indexes,
+sqlite3 files by ranged queries on the timestamp index; nothing is decoded here and nothing of
+the recording is held in memory.
 """
 
 from __future__ import annotations
@@ -11,19 +12,15 @@ import sqlite3
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
-from mcap.exceptions import McapError
-from mcap.reader import SeekingReader
-
 from medkit_replay.files import open_regular
 from medkit_replay.inputs.db3 import connect_read_only
-from medkit_replay.inputs.decompress import MAX_RATIO, RATIO_SLACK
-from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT
+from medkit_replay.inputs.mcap import NO_FOOTER, McapFile
+from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError
 from medkit_replay.msgdefs import Definition, normalize_typename
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Iterator
+    from collections.abc import Callable, Iterable, Iterator
     from pathlib import Path
-    from typing import IO
 
 _INT64_MAX = 2**63 - 1
 
@@ -61,60 +58,50 @@ class _File:
 
 
 class _McapFile(_File):
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.stream: IO[bytes] = open_regular(path)
-        try:
-            self._index()
-        except BaseException:
-            self.stream.close()
-            raise
+    """Read through the replay's MCAP reader (inputs.mcap): its bounds, its damage handling."""
 
-    def _index(self) -> None:
-        self.reader = SeekingReader(self.stream, validate_crcs=False)
-        summary = self.reader.get_summary()
+    def __init__(self, path: Path, note: Callable[[str], None]) -> None:
+        self.path = path
+        open_regular(path).close()  # a FIFO or device is refused, never waited on
+        # What opening finds (a profile, a missing footer) the replay has reported already.
+        self.file = McapFile(path, 0, lambda _: None)
+        self.file.warn = note  # damage met in a window: a note of the evidence
+        if not self.file.chunk_indexed:
+            # Time windows are read through the chunk index only: a file without one would
+            # be scanned whole for every capture.
+            problem = self.file.index_problem
+            if problem == NO_FOOTER:
+                raise ValueError("no summary section (a truncated file?)")
+            raise ValueError(problem or "no chunk index in its summary section")
         self.topics = {}
-        if summary is None:
-            raise ValueError("no summary section (a truncated file?)")
-        for chunk in summary.chunk_indexes:
-            ratio = MAX_RATIO.get(chunk.compression)
-            if ratio is not None and chunk.uncompressed_size > (
-                chunk.compressed_size * ratio + RATIO_SLACK
-            ):
-                raise ValueError(
-                    f"a chunk at byte {chunk.chunk_start_offset} declares "
-                    f"{chunk.uncompressed_size} bytes it cannot hold"
-                )
-        for channel in summary.channels.values():
-            schema = summary.schemas.get(channel.schema_id)
-            if schema is None or channel.message_encoding != "cdr":
+        for connection in self.file.connections.values():
+            if not connection.msgtype or connection.serialization != "cdr":
                 continue
             self.topics.setdefault(
-                channel.topic,
-                TopicInfo(
-                    normalize_typename(schema.name),
-                    Definition(schema.encoding, schema.data.decode("utf-8", "replace")),
-                    channel.message_encoding,
-                ),
+                connection.topic,
+                TopicInfo(connection.msgtype, connection.definition, connection.serialization),
             )
 
     def read(
         self, topics: Iterable[str], start_ns: int, end_ns: int, *, reverse: bool = False
     ) -> Iterator[RawMessage]:
-        wanted = [t for t in topics if t in self.topics]
+        wanted = {t for t in topics if t in self.topics}
         if not wanted:
             return
-        for _, channel, message in self.reader.iter_messages(
-            topics=wanted,
-            starting_at=max(start_ns, 0),
-            ending_at=min(end_ns, _INT64_MAX),
-            log_time_order=True,
+        window = self.file.read_window(
+            lambda connection: connection.topic in wanted,
+            max(start_ns, 0),
+            min(end_ns, _INT64_MAX),
             reverse=reverse,
-        ):
-            yield RawMessage(message.log_time, channel.topic, message.data)
+        )
+        for message in window:
+            connection, data = message.item
+            yield RawMessage(
+                message.t_ns, connection.topic, data if isinstance(data, bytes) else bytes(data)
+            )
 
     def close(self) -> None:
-        self.stream.close()
+        self.file.close()
 
 
 class _Db3File(_File):
@@ -212,25 +199,34 @@ class EvidenceSource:
                         # rendering the live (ROS 2) manager would make can be taken from it.
                         raise ValueError("a ROS 1 bag holds no ROS 2 messages to capture")
                     opened: _File = (
-                        _McapFile(file) if file.suffix.lower() == ".mcap" else _Db3File(file)
+                        _McapFile(file, self._note)
+                        if file.suffix.lower() == ".mcap"
+                        else _Db3File(file)
                     )
-                except (OSError, McapError, sqlite3.Error, ValueError, KeyError) as err:
+                except (OSError, NotABagError, sqlite3.Error, ValueError, KeyError) as err:
                     self.skipped.append(f"{file}: not read for evidence: {err}")
                     continue
                 self.files.append(opened)
                 for topic, info in opened.topics.items():
                     self.topics.setdefault(topic, info)
 
+    def _note(self, note: str) -> None:
+        """Note a problem once (damage met again by a later read is not repeated)."""
+        if note not in self.skipped:
+            self.skipped.append(note)
+
     def _guarded(self, file: _File, stream: Iterator[RawMessage]) -> Iterator[RawMessage]:
-        """A file's messages until it turns out damaged; the damage is noted once."""
+        """A file's messages until it turns out damaged; the damage is noted once.
+
+        The MCAP reader notes damage it can read past (a chunk lost) and goes on; sqlite3
+        raises on damaged pages, and stops the read.
+        """
         try:
             yield from stream
         except ImportError:
             raise
-        except Exception as err:  # mcap and sqlite3 raise many kinds on damaged bytes
-            note = f"{file.path}: stopped reading evidence at damage ({err})"
-            if note not in self.skipped:
-                self.skipped.append(note)
+        except Exception as err:  # sqlite3 raises many kinds on damaged bytes
+            self._note(f"{file.path}: stopped reading evidence at damage ({err})")
 
     def read(self, topics: Iterable[str], start_ns: int, end_ns: int) -> Iterator[RawMessage]:
         """Messages on ``topics`` with log time in [start_ns, end_ns], in time order."""

@@ -28,6 +28,7 @@ from medkit_replay.inputs.mcap_plan import (
     ReadAhead,
     plan_chunk,
 )
+from medkit_replay.inputs.mcap_window import merge_window, window_chunks
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
@@ -109,7 +110,7 @@ def _chunk_index(body: memoryview) -> ChunkIndex | None:
     """A well-formed chunk index record, parsed in one go; None for the careful parser."""
     if len(body) < _CHUNK_INDEX_HEAD.size:
         return None
-    start_ns, _, offset, length, map_length = _CHUNK_INDEX_HEAD.unpack_from(body)
+    start_ns, end_ns, offset, length, map_length = _CHUNK_INDEX_HEAD.unpack_from(body)
     end = _CHUNK_INDEX_HEAD.size + map_length
     if end > len(body) or map_length % _CHUNK_INDEX_ENTRY.size:
         return None
@@ -117,7 +118,7 @@ def _chunk_index(body: memoryview) -> ChunkIndex | None:
         cid for cid, _ in _CHUNK_INDEX_ENTRY.iter_unpack(body[_CHUNK_INDEX_HEAD.size : end])
     )
     index_length = _U64.unpack_from(body, end)[0] if end + 8 <= len(body) else 0
-    return ChunkIndex(start_ns, offset, length, channels, index_length)
+    return ChunkIndex(start_ns, offset, length, channels, index_length, end_ns)
 
 
 class McapFile:
@@ -149,6 +150,7 @@ class McapFile:
         self._chunks: list[ChunkIndex] | None = None
         self._wanted: dict[int, bool] = {}
         self._unknown_channels = 0
+        self.index_problem: str | None = None  # why the summary is unusable (None: no summary)
         try:
             with self._source.ranges() as reader:
                 self._size = reader.size
@@ -178,6 +180,7 @@ class McapFile:
             self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
         self._data_end = self._size
         problem = self._read_footer_and_summary(reader)
+        self.index_problem = problem
         if self._chunks is None:
             self.counts.clear()
             self.start_ns = self.end_ns = None
@@ -233,7 +236,7 @@ class McapFile:
             elif op == OP_CHUNK_INDEX and (fast := _chunk_index(record.data)) is not None:
                 indexes.append(fast)
             elif op == OP_CHUNK_INDEX:
-                start_ns, _, offset, length = (record.uint(8) for _ in range(4))
+                start_ns, end_ns, offset, length = (record.uint(8) for _ in range(4))
                 offsets = _Cursor(record.take(record.uint(4)))
                 channels = []
                 while offsets.pos < len(offsets.data):
@@ -244,7 +247,7 @@ class McapFile:
                 except _DamageError:
                     index_length = 0  # only an optimisation is lost
                 indexes.append(
-                    ChunkIndex(start_ns, offset, length, frozenset(channels), index_length)
+                    ChunkIndex(start_ns, offset, length, frozenset(channels), index_length, end_ns)
                 )
             elif op == OP_STATISTICS:
                 record.take(8 + 2 + 4 * 3)  # message, schema, channel, attachment, metadata counts
@@ -326,30 +329,84 @@ class McapFile:
             reader.forget(chunk.offset)
             if ahead is not None and (reader.always_ahead or self._cold):
                 ahead.advance(reader, number)
-            head = reader.read(chunk.offset, PLAIN_CHUNK_HEAD)
-            length = int.from_bytes(head[1:9], "little") if len(head) >= 9 else -1
-            if (
-                head[:1] != bytes([OP_CHUNK])
-                or 9 + length != chunk.length
-                or length > min(RECORD_SIZE_LIMIT, self._size - chunk.offset - 9)
-            ):
-                self.warn(
-                    f"{self.path}: the chunk index points to no valid chunk at byte "
-                    f"{chunk.offset}; messages from t={chunk.start_ns} in it are lost"
-                )
+            head = self._chunk_head(reader, chunk)
+            if head is None:
                 continue
             yield Bound(min(chunk.start_ns, cap))
-            timed = None
-            if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
-                plan = ahead.plans.pop(number, None) if ahead is not None else None
-                timed = self._by_index(reader, chunk, head, plan)
-            if timed is None:
-                body = self._read_into_buffer(reader, chunk.offset + 9, length)
-                yield from self._chunk(body, chunk.offset, cap, count=False)
-            elif timed:
-                timed.sort(key=_ORDER)
+            plan = ahead.plans.pop(number, None) if ahead is not None else None
+            timed = self._chunk_messages(reader, chunk, head, plan)
+            if timed:
                 yield Bound(min(timed[0].t_ns, cap))
                 yield timed
+
+    def _chunk_head(self, reader: RangeReader, chunk: ChunkIndex) -> bytes | None:
+        """The first bytes of the chunk record the index points to; None (warned): none there."""
+        head = reader.read(chunk.offset, PLAIN_CHUNK_HEAD)
+        length = int.from_bytes(head[1:9], "little") if len(head) >= 9 else -1
+        if (
+            head[:1] != bytes([OP_CHUNK])
+            or 9 + length != chunk.length
+            or length > min(RECORD_SIZE_LIMIT, self._size - chunk.offset - 9)
+        ):
+            self.warn(
+                f"{self.path}: the chunk index points to no valid chunk at byte "
+                f"{chunk.offset}; messages from t={chunk.start_ns} in it are lost"
+            )
+            return None
+        return head
+
+    def _chunk_messages(
+        self, reader: RangeReader, chunk: ChunkIndex, head: bytes, plan: Plan | None
+    ) -> list[Timed[Raw]]:
+        """The wanted messages of an indexed chunk whose ``head`` is valid, sorted by (log time,
+        position): by its message index when that pays, else the whole chunk decompressed."""
+        timed = None
+        if self.indexed and chunk.index_length and len(head) == PLAIN_CHUNK_HEAD:
+            timed = self._by_index(reader, chunk, head, plan)
+        if timed is None:
+            body = self._read_into_buffer(reader, chunk.offset + 9, chunk.length - 9)
+            for batch in self._chunk(body, chunk.offset, LOG_TIME_LIMIT, count=False):
+                if isinstance(batch, list):
+                    return batch
+            return []
+        timed.sort(key=_ORDER)
+        return timed
+
+    # -- reading a time window ------------------------------------------------------------------
+
+    @property
+    def chunk_indexed(self) -> bool:
+        """Whether the summary's chunk index is intact (time windows can be read)."""
+        return self._chunks is not None
+
+    def read_window(
+        self,
+        wants: Callable[[Connection], bool],
+        start_ns: int,
+        end_ns: int,
+        *,
+        reverse: bool = False,
+    ) -> Iterator[Timed[Raw]]:
+        """The wanted messages with log time in [start_ns, end_ns], in (log time, position)
+        order or, with ``reverse``, the opposite; only for a :attr:`chunk_indexed` file.
+
+        Chunks outside the window or without a wanted channel are never read; a chunk is read
+        only when the order needs it, so a reverse read taking the latest message reads the
+        chunks at the window's end only. Damage is warned and skipped as in :meth:`read`.
+        Several windows may be read at once (interleaved): each keeps its own wanted channels.
+        """
+        wanted: dict[int, bool] = {}
+        chunks = window_chunks(self._chunks or [], start_ns, end_ns, reverse=reverse)
+        with self._source.ranges() as reader:
+
+            def decode(chunk: ChunkIndex) -> list[Timed[Raw]]:
+                self._accept, self._wanted = wants, wanted  # this window's, while it decodes
+                if not self._has_wanted(chunk):
+                    return []
+                head = self._chunk_head(reader, chunk)
+                return [] if head is None else self._chunk_messages(reader, chunk, head, None)
+
+            yield from merge_window(chunks, decode, start_ns, end_ns, reverse=reverse)
 
     def _read_into_buffer(self, reader: RangeReader, offset: int, length: int) -> memoryview:
         """``length`` bytes at ``offset`` (fewer at the end of the file) in the reused buffer.

@@ -49,6 +49,7 @@ class ChunkIndex(NamedTuple):
     length: int
     channels: frozenset[int]  # channels with a message index record (empty: not said)
     index_length: int = 0  # bytes of message index records after the chunk (0: unknown)
+    end_ns: int = 2**63 - 1  # log time of its last message (the largest: not said)
 
 
 class Plan(NamedTuple):

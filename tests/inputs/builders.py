@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import yaml
+from mcap.writer import CompressionType, Writer as PlainWriter
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import CompressionFormat, CompressionMode, StoragePlugin
 from rosbags.rosbag2.storage_mcap import McapWriter
@@ -255,3 +256,39 @@ def flipped(source: Path, target: Path, offset: int) -> Path:
     data[offset] ^= 0xFF
     target.write_bytes(bytes(data))
     return target
+
+
+TOPICS = ("/camera", "/diagnostics", "/odom", "/tf")
+COMPRESSIONS = {
+    "none": CompressionType.NONE,
+    "zstd": CompressionType.ZSTD,
+    "lz4": CompressionType.LZ4,
+}
+Message = tuple[int, str, bytes]
+
+
+def write_mcap(
+    path: Path,
+    messages: list[Message],
+    compression: str = "none",
+    chunk_size: int = 8_000,
+    crcs: bool = False,
+    chunked: bool = True,
+) -> Path:
+    """A bare MCAP file written by the mcap library, messages in the order given (not sorted:
+    chunks may then overlap in time), on TOPICS, their payloads as given."""
+    with path.open("wb") as stream:
+        writer = PlainWriter(
+            stream,
+            chunk_size=chunk_size,
+            compression=COMPRESSIONS[compression],
+            enable_crcs=crcs,
+            use_chunking=chunked,
+        )
+        writer.start(profile="ros2")
+        schema = writer.register_schema("std_msgs/msg/String", "ros2msg", b"string data")
+        channels = {t: writer.register_channel(t, "cdr", schema) for t in TOPICS}
+        for sequence, (t_ns, topic, data) in enumerate(messages):
+            writer.add_message(channels[topic], t_ns, data, t_ns, sequence)
+        writer.finish()  # type: ignore[no-untyped-call]  # mcap ships it untyped
+    return path
