@@ -6,7 +6,8 @@ unchanged, and keeps what concerns the traced code; a replay without it is untou
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
 
 from medkit_replay.bridges import provenance
 from medkit_replay.inputs.script import SCRIPT_TYPE
@@ -48,19 +49,18 @@ if TYPE_CHECKING:
 _EVENT_NAMES = {int(e): e.name for e in EventType}
 
 
+_RENAMED = {"rule_id": "id"}  # RuleFacts' field -> the rule's attribute
+_SHOWN = {"representative"}  # an enum on the rule, its value's text in the trace
+
+
 def rule_facts(rule: CorrelationRule) -> RuleFacts:
-    """A correlation rule's settings as the trace keeps them."""
-    return RuleFacts(
-        rule_id=rule.id,
-        name=rule.name,
-        mode=rule.mode,
-        window_ms=rule.window_ms,
-        mute_symptoms=rule.mute_symptoms,
-        auto_clear_with_root=rule.auto_clear_with_root,
-        min_count=rule.min_count,
-        show_as_single=rule.show_as_single,
-        representative=str(rule.representative.value),
-    )
+    """A correlation rule's settings as the trace keeps them: every field of RuleFacts taken
+    from the rule's attribute of that name (no list of them to keep here)."""
+    values: dict[str, Any] = {}
+    for field in fields(RuleFacts):
+        value = getattr(rule, _RENAMED.get(field.name, field.name))
+        values[field.name] = str(value.value) if field.name in _SHOWN else value
+    return RuleFacts(**values)
 
 
 class Tracer:
