@@ -200,19 +200,12 @@ def write_reports(
 
     summary = sys.stderr if json_out == "-" else sys.stdout
     text = None
-    unprintable: MedkitReplayError | None = None
     # With a JSON report to write as well, the other outputs are written meanwhile by a child.
     with Forked(others) if json_out is not None and chosen else nullcontext():
         if not quiet:  # drawn now, while the children work; printed once all is written
             from medkit_replay.outputs.terminal import summary_text  # noqa: PLC0415
 
-            # rich touches the stream it lays out for, even while capturing: a full standard
-            # output fails here, and is said once the outputs are written, as before
-            try:
-                with nullcontext() if summary is sys.stderr else standard_output("the summary"):
-                    text = summary_text(result, summary)
-            except MedkitReplayError as err:
-                unprintable = err
+            text = summary_text(result, summary)
         if json_out == "-":
             with standard_output("the report"):
                 write_report_stdout(result, ahead)
@@ -225,8 +218,6 @@ def write_reports(
                 ) from None
     if json_out is None or not chosen:
         others()
-    if unprintable is not None:
-        raise unprintable
     if text is not None:
         if summary is sys.stderr:
             summary.write(text)

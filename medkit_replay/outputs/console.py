@@ -107,9 +107,14 @@ def draw(console: Console, renderable: RenderableType) -> None:
 
 
 def drawn(console: Console, renderable: RenderableType) -> str:
-    """What :func:`draw` would print, as text to print later (plain unless on a terminal)."""
-    with console.capture() as capture:
-        console.print(renderable)
+    """What :func:`draw` would print, as text to print later (plain unless on a terminal).
+
+    Laid out by a twin of ``console`` on a string (same width, terminal or not, colours): rich
+    writes to a console's stream even while capturing, and this must not touch it.
+    """
+    twin = literal_console(io.StringIO(), width=console.width, force_terminal=console.is_terminal)
+    with twin.capture() as capture:
+        twin.print(renderable)
     text = capture.get()
     return text if console.is_terminal else strip_trailing(text)
 

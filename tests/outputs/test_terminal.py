@@ -15,6 +15,7 @@ from medkit_replay.outputs.terminal import (
     print_summary,
     render_summary,
     summary_renderable,
+    summary_text,
 )
 from medkit_replay.pipeline import replay
 from medkit_replay.text import severity_name
@@ -102,6 +103,20 @@ def test_print_summary_colours_a_terminal(result: Result) -> None:
     print_summary(result, stream)
     assert ANSI.search(stream.getvalue()) is not None
     assert "MOTOR_OVERHEAT" in ANSI.sub("", stream.getvalue())
+
+
+@pytest.mark.parametrize("color", ["", "1"])
+def test_the_summary_drawn_ahead_is_the_one_printed(
+    result: Result, monkeypatch: pytest.MonkeyPatch, color: str
+) -> None:
+    """``analyze`` draws the summary while outputs are written and prints it after: the same
+    text, colours included, and the stream is not touched while drawing."""
+    if color:
+        monkeypatch.setenv("NO_COLOR", color)
+    for stream, fresh in ((FakeTTY(), FakeTTY()), (io.StringIO(), io.StringIO())):
+        print_summary(result, stream)
+        assert summary_text(result, fresh) == stream.getvalue()
+        assert fresh.getvalue() == ""
 
 
 def test_no_color_is_honoured_on_a_terminal(
