@@ -38,8 +38,7 @@ class Forked:
     def __init__(self, work: Callable[[], None]) -> None:
         self._pid: int | None = None
         self._answer: int | None = None
-        self._inline = not hasattr(os, "fork") or not hasattr(signal, "pthread_sigmask")
-        if self._inline:
+        if not hasattr(os, "fork") or not hasattr(signal, "pthread_sigmask"):
             work()  # no fork here: the work is done before this returns, as before
             return
         read, write = os.pipe()

@@ -49,8 +49,9 @@ class JsonAhead:
     """
 
     def __init__(self) -> None:
-        self._lists: dict[int, tuple[int, Spool[Any]]] = {}  # id(spool) -> (number, spool)
-        self._names: list[str] = []  # record class name per list number
+        # id(spool) -> (list number, the spool, its record class's name); the spool is held
+        # so that ids stay unique
+        self._lists: dict[int, tuple[int, Spool[Any], bytes]] = {}
         self._child: subprocess.Popen[bytes] | None = None
         self._file: IO[bytes] | None = None
         self._queue: deque[bytes] = deque()
@@ -75,12 +76,10 @@ class JsonAhead:
             name = getattr(getattr(spool.codec, "cls", None), "__name__", "")
             if name not in SPOOLED_LISTS:
                 return
-            known = self._lists[id(spool)] = (len(self._names), spool)  # held: ids stay unique
-            self._names.append(name)
+            known = self._lists[id(spool)] = (len(self._lists), spool, name.encode("ascii"))
         if self._child is None and not self._start():
             return
-        name = self._names[known[0]].encode("ascii")
-        frame = _FRAME.pack(known[0], name, index, len(data)) + data
+        frame = _FRAME.pack(known[0], known[2], index, len(data)) + data
         with self._lock:
             if self._queued + len(frame) > QUEUE_LIMIT:
                 return  # the child is behind: this chunk is encoded at the end instead
