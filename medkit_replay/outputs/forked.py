@@ -47,7 +47,14 @@ class Forked:
         # Signals wait until each side is in place: one raised in the child before its work is
         # under way would unwind into this process's own code, run by the child.
         held = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGNALS)
-        pid = os.fork()
+        try:
+            pid = os.fork()
+        except OSError:  # no process to be had (EAGAIN, ENOMEM): the work is done here
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+            os.close(read)
+            os.close(write)
+            work()
+            return
         if pid == 0:  # the child
             status = 1
             try:

@@ -75,3 +75,20 @@ def test_a_failure_here_ends_the_child(tmp_path: Path) -> None:
     with pytest.raises(ChildProcessError):
         os.waitpid(pid, 0)  # reaped already
     assert not marker.exists()
+
+
+def test_no_process_to_be_had_does_the_work_here(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse() -> int:
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", refuse)
+    done: list[int] = [os.getpid()]
+    with Forked(lambda: done.append(os.getpid())):
+        pass
+    assert done == [os.getpid(), os.getpid()]
+
+    def refuse_with_error() -> None:
+        raise ConfigError("bad value", path="p.yaml")
+
+    with pytest.raises(ConfigError, match="bad value"), Forked(refuse_with_error):
+        pass
