@@ -108,8 +108,14 @@ class JsonAhead:
             # waits for the child, nor takes the interpreter lock back and forth meanwhile.
             with contextlib.suppress(OSError):
                 fcntl.fcntl(self._child.stdin.fileno(), fcntl.F_SETPIPE_SZ, PIPE_SIZE)
-        self._thread = threading.Thread(target=self._send, name="medkit-replay-json", daemon=True)
-        self._thread.start()
+        thread = threading.Thread(target=self._send, name="medkit-replay-json", daemon=True)
+        try:
+            thread.start()
+        except RuntimeError:  # no thread to be had: everything is encoded at the end
+            self._failed = True
+            self.close()
+            return False
+        self._thread = thread
         return True
 
     def _send(self) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import signal
 import sys
+import threading
 from typing import TYPE_CHECKING
 
 import pytest
@@ -83,6 +84,22 @@ def test_a_child_that_cannot_start_changes_nothing(
         result = replay([script], spill_listener=ahead)
         assert _report(result, ahead) == plain
         assert ahead._child is None
+
+
+def test_no_thread_to_be_had_changes_nothing(
+    small_chunks: None, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    script = _busy_script(tmp_path)
+    plain = _report(replay([script]), None)
+
+    def refuse(self: threading.Thread) -> None:
+        raise RuntimeError("can't start new thread")
+
+    monkeypatch.setattr(threading.Thread, "start", refuse)
+    with JsonAhead() as ahead:
+        result = replay([script], spill_listener=ahead)
+        assert _report(result, ahead) == plain
+        assert ahead._child is None or ahead._child.poll() is not None  # stopped at once
 
 
 def test_chunks_beyond_the_queue_bound_are_encoded_at_the_end(
