@@ -258,4 +258,6 @@ def _child(fd: int) -> int:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) != 2 or not sys.argv[1].isdigit():
+        sys.exit("medkit-replay: the report's encoding helper, started by analyze itself")
     sys.exit(_child(int(sys.argv[1])))
