@@ -176,7 +176,7 @@ def prepare_reports(
     optional dependency is missing, a path would land on an input or a config file (or a file
     a config names), or the evidence folder is, holds or lies inside one of them."""
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
-    from medkit_replay.evidence.folder import refuse_overlap as refuse_evidence  # noqa: PLC0415
+    from medkit_replay.evidence.folder import refuse_folder_overlap  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
     chosen = [
@@ -186,7 +186,7 @@ def prepare_reports(
     read = [*local_paths(inputs), *config_files(configs)]
     refuse_overlap(read, _output_paths(json_out, chosen))
     if evidence_dir is not None:
-        refuse_evidence(evidence_dir, read)
+        refuse_folder_overlap(evidence_dir, read)
     return chosen, writers
 
 

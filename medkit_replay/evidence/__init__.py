@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from medkit_replay.evidence.folder import refuse_overlap
+from medkit_replay.evidence.folder import refuse_folder_overlap
 from medkit_replay.evidence.frames import freeze_frames
 from medkit_replay.evidence.graph import NodeGraph, load_graph
 from medkit_replay.evidence.plan import plan_evidence
@@ -81,7 +81,8 @@ def collect_evidence(
     """
     inputs = list(inputs)
     if options.directory is not None:  # the command refused it before the replay already
-        refuse_overlap(options.directory, [path for path in inputs if isinstance(path, Path)])
+        local = [path for path in inputs if isinstance(path, Path)]
+        refuse_folder_overlap(options.directory, local)
     unused = (
         ("--evidence is given but snapshots.rosbag.enabled is false: no recording to write",)
         if options.directory is not None and not config.rosbag.enabled

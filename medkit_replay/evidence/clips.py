@@ -65,18 +65,10 @@ def write_recordings(
         for recording, folder in zip(plan.recordings, folders, strict=True)
     ]
     wanted = [t for t in targets if t is not None]
-    refused: tuple[str, ...] = ()
-    if directory is not None and wanted:
-        try:
-            directory.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot create the evidence folder: {err.strerror or err}", path=str(directory)
-            ) from None
-        refused = tuple(str(path) for path in foreign(wanted))
-    writing = directory is not None and wanted and not refused
+    refused = tuple(str(path) for path in foreign(wanted))
     recordings: list[EvidenceRecording] = []
-    with _staging(directory) if writing and directory is not None else nullcontext() as staging:
+    writing = _staging(directory) if directory is not None and wanted and not refused else None
+    with writing if writing is not None else nullcontext() as staging:
         for recording, target in zip(plan.recordings, targets, strict=True):
             try:
                 recordings.append(
@@ -101,9 +93,10 @@ def write_recordings(
 
 @contextmanager
 def _staging(directory: Path) -> Iterator[Path]:
-    """A new folder in ``directory`` (never an existing path, never through a link), removed
-    with whatever is left in it however the block ends."""
+    """A new folder in ``directory`` (made if missing), never an existing path nor through a
+    link, removed with whatever is left in it however the block ends."""
     try:
+        directory.mkdir(parents=True, exist_ok=True)
         path = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=directory))
     except OSError as err:
         raise MedkitReplayError(

@@ -25,7 +25,7 @@ STAGING_PREFIX = ".medkit-replay-partial-"
 """Clips are written in a fresh folder of this prefix inside the evidence folder, then moved."""
 
 
-def refuse_overlap(directory: Path, protected: Iterable[Path]) -> None:
+def refuse_folder_overlap(directory: Path, protected: Iterable[Path]) -> None:
     """Refuse an evidence folder that is, holds or lies inside a file or folder the run reads.
 
     Symbolic links are resolved on both sides.
@@ -90,8 +90,8 @@ def foreign(targets: Iterable[Path]) -> list[Path]:
     for target in targets:
         try:
             target.lstat()
-        except FileNotFoundError:
-            continue
+        except (FileNotFoundError, NotADirectoryError):
+            continue  # nothing there (the folder is made, or refused, when clips are written)
         except OSError:
             found.append(target)  # cannot be looked at: not provably ours
             continue

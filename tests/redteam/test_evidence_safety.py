@@ -284,6 +284,16 @@ def test_a_linked_staging_folder_leads_nowhere(tmp_path: Path, robot: tuple[Robo
     assert sorted(p.name for p in clips.iterdir()) == [".medkit-replay-partial", BATTERY, KEPT]
 
 
+def test_an_evidence_folder_that_cannot_be_made_is_one_line(
+    tmp_path: Path, robot: tuple[Robot, Path]
+) -> None:
+    bot, config = robot
+    (tmp_path / "a_file").write_text("x\n")
+    outcome = run_limited(analyze(bot, config, tmp_path / "a_file" / "clips"))
+    assert_one_line_error(outcome, "cannot write in the evidence folder", "Not a directory")
+    assert (tmp_path / "a_file").read_text() == "x\n"
+
+
 # --- a failed write leaves nothing behind ------------------------------------------------------
 
 
