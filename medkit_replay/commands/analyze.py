@@ -90,7 +90,8 @@ _REPORT_OPTIONS = (
     "evidence_dir",
     type=click.Path(path_type=Path, file_okay=False),
     default=None,
-    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder.",
+    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder "
+    "(a folder there is replaced only when an earlier run wrote it: .medkit-replay-clip).",
 )
 @click.option(
     "--evidence-all",
