@@ -81,6 +81,9 @@ class Result:
     evidence_notes: tuple[str, ...] = ()
     fetched: dict[str, tuple[int, int]] = field(default_factory=dict)
     """Remote inputs by name: (bytes fetched, bytes of their files); not in the JSON report."""
+    evidence_refused: tuple[str, ...] = ()
+    """Clip folders left unwritten: the evidence folder held something else under their names
+    (no clip was written then); not in the JSON report, which is the same either way."""
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

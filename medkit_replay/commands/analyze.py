@@ -1,6 +1,7 @@
 """``medkit-replay analyze``: replay recordings and write the report in every format asked for.
 
-Outputs are refused before the replay when they would land on an input or a config file.
+Outputs are refused before the replay when they would land on an input or a config file, and
+the evidence folder when it is, holds or lies inside one.
 """
 
 from __future__ import annotations
@@ -89,7 +90,8 @@ _REPORT_OPTIONS = (
     "evidence_dir",
     type=click.Path(path_type=Path, file_okay=False),
     default=None,
-    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder.",
+    help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder "
+    "(a folder there is replaced only when an earlier run wrote it: .medkit-replay-clip).",
 )
 @click.option(
     "--evidence-all",
@@ -131,9 +133,7 @@ def analyze(
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
     # The node graph is read like a config: no output may land on it.
     read = (*inputs, graph_file) if graph_file is not None else inputs
-    chosen, writers = prepare_reports(read, configs, json_out, targets)
-    if evidence_dir is not None:
-        refuse_inside_inputs(evidence_dir, local_paths(inputs))
+    chosen, writers = prepare_reports(read, configs, json_out, targets, evidence_dir)
     evidence = EvidenceOptions(
         graph=load_graph(graph_file) if graph_file is not None else None,
         directory=evidence_dir,
@@ -153,6 +153,17 @@ def analyze(
         if ahead is not None:
             ahead.finish()
         write_reports(result, json_out, chosen, writers, quiet=quiet, ahead=ahead)
+    if result.evidence_refused:
+        from medkit_replay.evidence.folder import MARKER  # noqa: PLC0415
+
+        first, *others = result.evidence_refused
+        more = f" ({len(others):,} more folders alike)" if others else ""
+        raise MedkitReplayError(
+            f"has a clip's name but is not a clip this tool wrote (no {MARKER} in it){more}; "
+            "no recording was written, the other outputs were: write the clips to another "
+            "folder",
+            path=first,
+        )
 
 
 def prepare_reports(
@@ -160,17 +171,23 @@ def prepare_reports(
     configs: Sequence[Path],
     json_out: str | None,
     targets: dict[str, Path | None],
+    evidence_dir: Path | None = None,
 ) -> tuple[list[tuple[FileOutput, Path]], list[Callable[[Result, Path], object]]]:
     """The outputs asked for (by option) and their writers, refused before any replay when an
-    optional dependency is missing or a path would land on an input or a config file."""
+    optional dependency is missing, a path would land on an input or a config file (or a file
+    a config names), or the evidence folder is, holds or lies inside one of them."""
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.evidence.folder import refuse_folder_overlap  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
     chosen = [
         (output, target) for output in OUTPUTS if (target := targets[output.option]) is not None
     ]
     writers = [output.load() for output, _ in chosen]  # a missing extra is said before the replay
-    refuse_overlap([*local_paths(inputs), *config_files(configs)], _output_paths(json_out, chosen))
+    read = [*local_paths(inputs), *config_files(configs)]
+    refuse_overlap(read, _output_paths(json_out, chosen))
+    if evidence_dir is not None:
+        refuse_folder_overlap(evidence_dir, read)
     return chosen, writers
 
 
@@ -224,19 +241,6 @@ def write_reports(
         else:
             with standard_output("the summary"):
                 summary.write(text)
-
-
-def refuse_inside_inputs(directory: Path, inputs: Sequence[Path]) -> None:
-    """Inputs are sacred: recordings are never written into (or over) an input."""
-    target = directory.resolve()
-    for path in inputs:
-        held = path.resolve()
-        folder = held if held.is_dir() else held.parent
-        if target == held or (held.is_dir() and target.is_relative_to(folder)):
-            raise MedkitReplayError(
-                f"--evidence would write into the input {path}; choose another folder",
-                path=str(directory),
-            )
 
 
 def _output_paths(

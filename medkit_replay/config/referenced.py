@@ -16,7 +16,11 @@ if TYPE_CHECKING:
     from collections.abc import Iterable
 
 # fault_manager parameters whose value is a file, resolved beside the file that sets them.
-FILE_PARAMETERS = ("correlation.config_file", "entity_thresholds.config_file")
+FILE_PARAMETERS = (
+    "correlation.config_file",
+    "entity_thresholds.config_file",
+    "snapshots.config_file",
+)
 
 
 def config_files(configs: Iterable[str | Path], *, check: bool = True) -> list[Path]:

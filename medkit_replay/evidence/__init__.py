@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
-from medkit_replay.errors import MedkitReplayError
+from medkit_replay.evidence.folder import refuse_folder_overlap
 from medkit_replay.evidence.frames import freeze_frames
 from medkit_replay.evidence.graph import NodeGraph, load_graph
 from medkit_replay.evidence.plan import plan_evidence
@@ -18,7 +19,6 @@ from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
-    from pathlib import Path
 
     from medkit_replay.evidence.plan import Plan
     from medkit_replay.evidence.source import EvidenceSource
@@ -62,6 +62,8 @@ class Evidence:
     snapshots: tuple[SnapshotCapture, ...] = ()
     recordings: tuple[EvidenceRecording, ...] = ()
     notes: tuple[str, ...] = field(default_factory=tuple)
+    refused: tuple[str, ...] = ()
+    """Clip folders not written: the evidence folder held something else under their names."""
 
 
 def collect_evidence(
@@ -72,7 +74,15 @@ def collect_evidence(
     reports: Iterable[ReportRecord],
     recorded_topics: Iterable[str],
 ) -> Evidence:
-    """Plan the captures from the transitions, then read what they would have taken."""
+    """Plan the captures from the transitions, then read what they would have taken.
+
+    Raises:
+        MedkitReplayError: the evidence folder overlaps an input, or cannot be written.
+    """
+    inputs = list(inputs)
+    if options.directory is not None:  # the command refused it before the replay already
+        local = [path for path in inputs if isinstance(path, Path)]
+        refuse_folder_overlap(options.directory, local)
     unused = (
         ("--evidence is given but snapshots.rosbag.enabled is false: no recording to write",)
         if options.directory is not None and not config.rosbag.enabled
@@ -121,36 +131,13 @@ def _gather(
 ) -> Evidence:
     notes = list(plan.notes)
     snapshots = freeze_frames(plan, config, source)
-    recordings: list[EvidenceRecording] = []
-    directory = options.directory
-    if directory is not None and plan.recordings:
-        try:
-            directory.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot create the evidence folder: {err.strerror or err}", path=str(directory)
-            ) from None
+    recordings: tuple[EvidenceRecording, ...] = ()
+    refused: tuple[str, ...] = ()
     if plan.recordings:
         # rosbags' writers load only for a replay that plans recordings.
-        from medkit_replay.evidence.clips import evidence_recording  # noqa: PLC0415
-    for recording in plan.recordings:
-        write = directory is not None and (recording.deleted is None or options.everything)
-        target = directory / recording.name if write and directory is not None else None
-        try:
-            recordings.append(
-                evidence_recording(
-                    recording,
-                    plan.subscribed,
-                    source,
-                    target,
-                    config.rosbag.format,
-                    config.rosbag.max_bag_size_mb * 1024 * 1024,
-                )
-            )
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write recording: {err.strerror or err}", path=str(target)
-            ) from None
+        from medkit_replay.evidence.clips import write_recordings  # noqa: PLC0415
+
+        recordings, refused = write_recordings(plan, config.rosbag, options, source)
     if source.skipped:  # after the reads: damage met inside a capture's window is listed too
         notes.append("evidence could not be read from: " + "; ".join(source.skipped))
-    return Evidence(snapshots, tuple(recordings), tuple(notes))
+    return Evidence(snapshots, recordings, tuple(notes), refused)

@@ -242,6 +242,7 @@ def replay(
         snapshots=found.snapshots,
         recordings=found.recordings,
         evidence_notes=found.notes,
+        evidence_refused=found.refused,
         fetched=fetched,
     )
 
