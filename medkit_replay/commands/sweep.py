@@ -181,6 +181,7 @@ def sweep(
                 outcome.failed,
                 out_dir,
                 budget=parsed_budget is not None,
+                over_budget=outcome.over,
             )
             print_summary(sys.stdout, parts)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
