@@ -234,6 +234,9 @@ class Result:
     retroactive_mutes: tuple[RetroactiveMute, ...] = ()
     parity: dict[str, object] | None = None
     warnings: tuple[str, ...] = ()
+    consumed: Consumption | None = None
+    """What each path into the fault manager took (None: a Result not made by a replay); not
+    in the JSON report."""
     summary: Summary
     config: dict[str, object] = field(default_factory=dict)
     snapshots: tuple[SnapshotCapture, ...] = ()
@@ -241,9 +244,6 @@ class Result:
     evidence_notes: tuple[str, ...] = ()
     fetched: dict[str, tuple[int, int]] = field(default_factory=dict)
     """Remote inputs by name: (bytes fetched, bytes of their files); not in the JSON report."""
-    consumed: Consumption | None = None
-    """What each path into the fault manager took (None: a Result not made by a replay); not
-    in the JSON report."""
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

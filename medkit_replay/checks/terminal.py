@@ -52,8 +52,8 @@ def _verdict_rows(grid: Table, verdict: Verdict) -> None:
 
 
 def run_renderable(run: CheckRun) -> list[RenderableType]:
-    """The verdicts of one run: a heading, a line per rule, the replay's warnings (or why the
-    recording could not be read)."""
+    """The verdicts of one run: a heading, a line per rule (or why the run was not checked:
+    its recording could not be read, or nothing was replayed), the replay's warnings."""
     head = Text("check ", style="bold")
     head.append(printable(run.label), style="bold")
     head.append(f" against {printable(run.budget.title)}: ")
