@@ -7,6 +7,7 @@ The budget is the issue's: negative rules only, which an empty replay would triv
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import textwrap
 import xml.etree.ElementTree as ET
@@ -17,7 +18,7 @@ import pytest
 from medkit_replay.checks import load_budget, nothing_replayed
 from medkit_replay.checks.github import escape_data
 from medkit_replay.pipeline import replay
-from medkit_replay.result import TopicUse
+from medkit_replay.result import Consumption, TopicUse
 from tests.checks.support import write_budget
 from tests.inputs.builders import (
     diag,
@@ -166,6 +167,53 @@ def test_the_log_bridge_the_line_names_reads_the_recording(
     sane(outcome)
     assert outcome.status == 0, outcome.stdout[-2000:]
     assert "budget holds" in outcome.stdout
+
+
+def test_diagnostics_on_another_topic_are_named_with_the_parameter_that_reads_them(
+    tmp_path: Path, budget: Path
+) -> None:
+    records = [dataclasses.replace(diag(k * SECOND), topic="/diag_agg") for k in range(1, 4)]
+    bag = write_bag(tmp_path / "bag", records)
+    outcome = run_limited(["check", bag, "--budget", budget])
+    sane(outcome)
+    assert outcome.status == 1
+    hint = "(/diag_agg holds 3 DiagnosticArrays: diagnostic_bridge.diagnostics_topic: /diag_agg"
+    assert f"ERROR {bag}: nothing replayed: no /diagnostics {hint} to read it), " in outcome.stdout
+    params = tmp_path / "params.yaml"
+    params.write_text(
+        "diagnostic_bridge:\n  ros__parameters: {diagnostics_topic: /diag_agg}\n", encoding="utf-8"
+    )
+    read = run_limited(["check", bag, "--budget", budget, "--config", params])
+    assert read.status == 0, read.stdout[-2000:]
+
+
+def test_the_line_for_each_missing_path() -> None:
+    base = Consumption(
+        messages_read=4,
+        holds_messages=True,
+        diagnostics_topic="/diagnostics",
+        rosout_topic="/rosout",
+        log_bridge=True,
+        taken=(TopicUse("fault_events", "/fault_manager/events", 4),),
+        metadata_only=2,
+    )
+    assert base.empty
+    assert base.nothing_replayed() == (
+        f"nothing replayed: {NONE}, no /rosout, 2 ReportFault/ClearFault calls recorded without "
+        "the request (metadata-only service introspection)"
+    )
+    assert base.lines()[2:] == [
+        "log bridge: nothing on /rosout",
+        "recorded ReportFault calls: 0, ClearFault calls: 0 (2 more recorded without their "
+        "request)",
+        "recorded fault manager events: 4 (compared under parity; they raise no fault)",
+    ]
+    for fed in (
+        dataclasses.replace(base, clear_calls=1),
+        dataclasses.replace(base, taken=(TopicUse("script", "", 3),)),
+        dataclasses.replace(base, taken=(TopicUse("log_bridge", "/rosout", 0),)),
+    ):
+        assert not fed.empty
 
 
 # --- check ----------------------------------------------------------------------------------
