@@ -31,15 +31,6 @@ if TYPE_CHECKING:
 REPORT_SCHEMA = "medkit-replay/report/v1"
 """Schema of the JSON report a Result is written as (``outputs/json_report.py``)."""
 STATUSES, EVENT_KINDS = model.STATUSES, model.EVENT_KINDS  # re-exported for outputs and checks
-FAULT_PATHS = (
-    "diagnostic_bridge",
-    "action_status_bridge",
-    "log_bridge",
-    "report_fault",
-    "clear_fault",
-    "script",
-)
-"""The paths by which a recording reaches the fault manager, named as requests name their origin."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -68,8 +59,9 @@ class Summary:
 
 @dataclass(frozen=True, slots=True)
 class TopicUse:
-    """Messages on one topic and the path that reads them (an origin of FAULT_PATHS, or
-    ``fault_events``: recorded FaultEvents, compared under ``parity``, which raise nothing)."""
+    """Messages on one topic and the path that reads them, named as requests name their origin
+    (a bridge, ``report_fault`` or ``clear_fault`` for recorded calls, ``script``), or
+    ``fault_events``: recorded FaultEvents, compared under ``parity``, which raise nothing."""
 
     origin: str
     topic: str
@@ -77,7 +69,7 @@ class TopicUse:
 
 
 _FED = ("diagnostic_bridge", "action_status_bridge", "log_bridge", "script")
-"""Paths that raise faults from every message they take (recorded calls count by call)."""
+"""Paths into the fault manager fed by messages (recorded calls count by call, not message)."""
 
 
 def _count(number: int, word: str) -> str:
