@@ -68,7 +68,8 @@ class ServiceCallReplayer:
 
     Not a bridge of upstream's but the same shape: messages in, requests out. Responses are
     kept in :attr:`responses` for the parity check; calls whose request payload was not
-    recorded (metadata-only introspection) are counted in :attr:`metadata_only`.
+    recorded (metadata-only introspection) are counted in :attr:`metadata_only` (by topic), the
+    calls turned into requests in :attr:`calls` (by kind: ``report`` or ``clear``).
     """
 
     name = "service_calls"
@@ -77,6 +78,7 @@ class ServiceCallReplayer:
         self._calls: OrderedDict[tuple[bytes, int, str], _Call] = OrderedDict()
         self.responses: list[RecordedResponse] = []
         self.metadata_only: dict[str, int] = {}
+        self.calls: dict[str, int] = {}
 
     def wants(self, topic: str, msgtype: str) -> bool:
         """Service-event topics of the two fault-manager services that change state."""
@@ -110,6 +112,7 @@ class ServiceCallReplayer:
                 # A payload after a metadata-only copy of the same call: it counts after all.
                 self.metadata_only[topic] -= 1
             self._remember(key, _Call(kind, request.fault_code, applied=True, t_ns=t_ns))
+            self.calls[kind] = self.calls.get(kind, 0) + 1
             return [request]
         if info.event_type in (RESPONSE_SENT, RESPONSE_RECEIVED) and msg.response:
             self._response(t_ns, topic, kind, call, msg.response[0])

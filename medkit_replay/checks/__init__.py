@@ -10,7 +10,14 @@ from __future__ import annotations
 
 from medkit_replay.checks.budget import Budget, Rule
 from medkit_replay.checks.budget_file import load_budget, parse_budget
-from medkit_replay.checks.evaluate import CheckRun, Verdict, check_run, evaluate
+from medkit_replay.checks.evaluate import (
+    CheckRun,
+    Verdict,
+    check_run,
+    evaluate,
+    failed_rules,
+    nothing_replayed,
+)
 from medkit_replay.checks.facts import Offender
 
 __all__ = [
@@ -21,6 +28,8 @@ __all__ = [
     "Verdict",
     "check_run",
     "evaluate",
+    "failed_rules",
     "load_budget",
+    "nothing_replayed",
     "parse_budget",
 ]

@@ -188,6 +188,8 @@ class Budget:
     rules: tuple[Rule, ...]
     name: str | None = None
     version: int = BUDGET_VERSION
+    allow_empty: bool = False
+    """Let a replay that took nothing hold the budget (``--allow-empty``; no key of the file)."""
 
     @property
     def title(self) -> str:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
@@ -367,8 +368,9 @@ def _unique_names(reader: _Reader, parsed: list[tuple[Rule, bool]]) -> tuple[Rul
     return tuple(rules)
 
 
-def load_budget(path: str | Path) -> Budget:
-    """Read and parse a budget file.
+def load_budget(path: str | Path, *, allow_empty: bool = False) -> Budget:
+    """Read and parse a budget file; ``allow_empty`` (``--allow-empty``) lets a replay that
+    took nothing hold it.
 
     Raises:
         ConfigError: the file is missing, unreadable or not a valid budget (file and line).
@@ -385,4 +387,5 @@ def load_budget(path: str | Path) -> Budget:
     except UnicodeDecodeError as err:
         line = data.count(b"\n", 0, err.start) + 1
         raise ConfigError(f"cannot read budget file: {err}", path=shown, line=line) from None
-    return parse_budget(text, shown)
+    budget = parse_budget(text, shown)
+    return replace(budget, allow_empty=True) if allow_empty else budget

@@ -58,7 +58,9 @@ class CheckRun:
     verdicts: tuple[Verdict, ...]
     warnings: tuple[str, ...] = ()
     error: str | None = None
-    """Why the run could not be replayed (one line); then it has no verdicts and fails."""
+    """Why the run was not checked (one line): its recording could not be replayed, or
+    nothing in it reached the fault manager (``empty``); then it has no verdicts and fails."""
+    empty: bool = False
 
     @property
     def passed(self) -> bool:
@@ -72,14 +74,46 @@ class CheckRun:
 
 
 def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun:
-    """The budget's verdicts on a replay of ``inputs``, labelled for the outputs."""
+    """The budget's verdicts on a replay of ``inputs``, labelled for the outputs; a replay
+    that took nothing is a failed run saying what was missing (see :func:`nothing_replayed`)."""
+    label = " + ".join(inputs)
+    empty = nothing_replayed(budget, result)
+    if empty is not None:
+        return CheckRun(
+            label=label,
+            inputs=tuple(inputs),
+            budget=budget,
+            verdicts=(),
+            warnings=result.warnings,
+            error=f"{label}: {empty}",
+            empty=True,
+        )
     return CheckRun(
-        label=" + ".join(inputs),
+        label=label,
         inputs=tuple(inputs),
         budget=budget,
         verdicts=evaluate(budget, result),
         warnings=result.warnings,
     )
+
+
+def nothing_replayed(budget: Budget, result: Result) -> str | None:
+    """Why no budget holds on this replay: nothing in the recording reached a path that can
+    raise a fault (no bridge saw its topic, no recorded call, nothing readable), in one line
+    saying what was missing; None when something did, or the budget allows it."""
+    consumed = result.consumed
+    if budget.allow_empty or consumed is None or not consumed.empty:
+        return None
+    return consumed.nothing_replayed()
+
+
+def failed_rules(budget: Budget, result: Result) -> tuple[str, ...]:
+    """What fails the budget on one replay, as fleet and sweep rows list it: the line of
+    :func:`nothing_replayed` alone, else the names of the rules that did not hold."""
+    empty = nothing_replayed(budget, result)
+    if empty is not None:
+        return (empty,)
+    return tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
 
 
 def unreadable_run(budget: Budget, inputs: Sequence[str], error: str) -> CheckRun:

@@ -63,7 +63,8 @@ def workflow_commands(runs: Sequence[CheckRun]) -> list[str]:
     commands: list[str] = []
     for run in runs:
         if run.error is not None:
-            title = escape_property(printable(f"recording cannot be read ({run.label})"))
+            why = "nothing replayed" if run.empty else "recording cannot be read"
+            title = escape_property(printable(f"{why} ({run.label})"))
             commands.append(f"::error title={title}::{escape_data(printable(run.error))}")
         for verdict in run.failures:
             rule = verdict.rule
@@ -89,18 +90,23 @@ def _cell(verdict: Verdict) -> str:
 def step_summary(runs: Sequence[CheckRun]) -> str:
     """The Markdown page appended to ``$GITHUB_STEP_SUMMARY``: a verdict table per run."""
     held = all(run.passed for run in runs)
-    unreadable = any(run.error is not None for run in runs)
+    unreadable = any(run.error is not None and not run.empty for run in runs)
+    empty = any(run.empty for run in runs)
     budget = runs[0].budget if runs else None
-    headline = "budget exceeded ❌" if not unreadable else "a recording cannot be read ❌"
+    headline = "budget exceeded ❌"
+    if unreadable or empty:
+        headline = "a recording cannot be read ❌" if unreadable else "nothing replayed ❌"
     lines = ["## medkit-replay check: " + ("budget holds ✅" if held else headline), ""]
     if budget is not None:
         lines += [f"Budget: {markdown(budget.title)} ({markdown(budget.path)})", ""]
     for run in runs:
         if run.error is not None:
             lines += [
-                f"### ❌ {markdown(run.label)}: cannot be read",
+                f"### ❌ {markdown(run.label)}: "
+                + ("nothing replayed" if run.empty else "cannot be read"),
                 "",
                 f"- {markdown(run.error)}",
+                *(f"- ⚠️ {markdown(clip(w, WARNING_CAP))}" for w in run.warnings),
                 "",
             ]
             continue

@@ -1,9 +1,9 @@
 """Budget verdicts as JUnit XML: one testsuite per run, one testcase per rule.
 
 A failed rule is a ``<failure>`` whose ``message`` names the offending faults on one line and
-whose text lists them one per line. A run whose recording cannot be read has one testcase with
-an ``<error>`` saying why. Written with xml.etree; text XML cannot hold is escaped; the file is
-written through a temporary file renamed into place.
+whose text lists them one per line. A run whose recording cannot be read, or in which nothing
+was replayed, has one testcase with an ``<error>`` saying why. Written with xml.etree; text XML
+cannot hold is escaped; the file is written through a temporary file renamed into place.
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ MAX_IN_MESSAGE = 20
 """Offending faults named in a failure's one-line message; its text lists every one."""
 UNREADABLE_CASE = "the recording can be read"
 """The testcase of a run whose recording could not be replayed."""
+EMPTY_CASE = "something was replayed"
+"""The testcase of a run in which nothing reached the fault manager (``--allow-empty``: none)."""
 
 
 def failure_message(verdict: Verdict) -> str:
@@ -64,14 +66,13 @@ def _unreadable_case(suite: ET.Element, run: CheckRun, error: str) -> None:
         suite,
         "testcase",
         {
-            "name": UNREADABLE_CASE,
+            "name": EMPTY_CASE if run.empty else UNREADABLE_CASE,
             "classname": xml_text(run.label),
             "file": xml_text(run.inputs[0]),
         },
     )
-    ET.SubElement(
-        case, "error", {"message": xml_text(error), "type": "unreadable"}
-    ).text = xml_text(error)
+    kind = "empty" if run.empty else "unreadable"
+    ET.SubElement(case, "error", {"message": xml_text(error), "type": kind}).text = xml_text(error)
 
 
 def junit_element(runs: Sequence[CheckRun]) -> ET.Element:

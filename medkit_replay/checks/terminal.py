@@ -52,29 +52,23 @@ def _verdict_rows(grid: Table, verdict: Verdict) -> None:
 
 
 def run_renderable(run: CheckRun) -> list[RenderableType]:
-    """The verdicts of one run: a heading, a line per rule, the replay's warnings (or why the
-    recording could not be read)."""
-    if run.error is not None:
-        head = Text("check ", style="bold")
-        head.append(printable(run.label), style="bold")
-        head.append(f" against {printable(run.budget.title)}: ")
-        head.append("not checked, the recording cannot be read", style="bold red")
-        grid = Table.grid(padding=(0, 1))
-        grid.add_column(no_wrap=True)
-        grid.add_column(overflow="fold")
-        grid.add_row(Text("ERROR", style="bold red"), Text(printable(run.error), style="red"))
-        return [head, grid, Text("")]
-    failed = len(run.failures)
+    """The verdicts of one run: a heading, a line per rule (or why the run was not checked:
+    its recording could not be read, or nothing was replayed), the replay's warnings."""
     head = Text("check ", style="bold")
     head.append(printable(run.label), style="bold")
     head.append(f" against {printable(run.budget.title)}: ")
-    if failed:
-        head.append(f"{failed} of {_plural(len(run.verdicts), 'rule')} failed", style="bold red")
-    else:
-        head.append(f"all {_plural(len(run.verdicts), 'rule')} passed", style="bold green")
     grid = Table.grid(padding=(0, 1))
     grid.add_column(no_wrap=True)
     grid.add_column(overflow="fold")
+    failed = len(run.failures)
+    if run.error is not None:
+        why = "nothing was replayed" if run.empty else "the recording cannot be read"
+        head.append(f"not checked, {why}", style="bold red")
+        grid.add_row(Text("ERROR", style="bold red"), Text(printable(run.error), style="red"))
+    elif failed:
+        head.append(f"{failed} of {_plural(len(run.verdicts), 'rule')} failed", style="bold red")
+    else:
+        head.append(f"all {_plural(len(run.verdicts), 'rule')} passed", style="bold green")
     for verdict in run.verdicts:
         _verdict_rows(grid, verdict)
     for warning in run.warnings:
@@ -84,11 +78,16 @@ def run_renderable(run: CheckRun) -> list[RenderableType]:
 
 
 def conclusion(runs: Sequence[CheckRun]) -> Text:
-    """The last line: whether the budget held on every run (a run that could not be read
-    never holds it)."""
-    unreadable = [r for r in runs if r.error is not None]
-    if unreadable:
-        text = f"check failed: {len(unreadable)} of {_plural(len(runs), 'run')} could not be read"
+    """The last line: whether the budget held on every run (a run that could not be read, or
+    that replayed nothing, never holds it)."""
+    unreadable = [r for r in runs if r.error is not None and not r.empty]
+    empty = [r for r in runs if r.empty]
+    if unreadable or empty:
+        said = [(len(unreadable), "could not be read")] if unreadable else []
+        said += [(len(empty), "replayed nothing")] if empty else []
+        (count, what), *more = said
+        text = f"check failed: {count} of {_plural(len(runs), 'run')} {what}"
+        text += "".join(f", {n} {other}" for n, other in more)
         over = [r for r in runs if r.error is None and not r.passed]
         if over:
             failures = sum(len(r.failures) for r in over)

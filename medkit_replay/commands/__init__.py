@@ -52,6 +52,18 @@ def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:
     )
 
 
+def allow_empty_option() -> Callable[[FC], FC]:
+    """``--allow-empty``: a run in which nothing reached the fault manager may hold the budget
+    (``check``, ``fleet --budget``, ``sweep --budget``)."""
+    return click.option(
+        "--allow-empty",
+        is_flag=True,
+        help="Let a run pass the budget though nothing in it reached the fault manager (no "
+        "bridge topic, no recorded ReportFault/ClearFault call, nothing readable); without it "
+        "such a run fails.",
+    )
+
+
 MAX_TIMEOUT = 10**9
 """Seconds: a longer --timeout is refused (some 30 years)."""
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import allow_empty_option, config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
@@ -54,6 +54,7 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
     is_flag=True,
     help="Print GitHub Actions annotations; append a summary to $GITHUB_STEP_SUMMARY if set.",
 )
+@allow_empty_option()
 @click.pass_context
 def check(
     ctx: click.Context,
@@ -63,12 +64,15 @@ def check(
     merge: bool,
     junit_out: Path | None,
     github: bool,
+    allow_empty: bool,
 ) -> None:
     """Replay each INPUT and check it against a fault budget.
 
-    Each INPUT is its own run (one mission per recording) unless --merge is given. Exit
-    status: 0 every rule holds on every run, 1 the budget is exceeded or a recording cannot be
-    read, 2 bad usage, budget or config, or an INPUT that does not exist.
+    Each INPUT is its own run (one mission per recording) unless --merge is given. A run in
+    which nothing reached the fault manager fails, whatever the rules (--allow-empty passes
+    it). Exit status: 0 every rule holds on every run, 1 the budget is exceeded or a recording
+    cannot be read or replayed nothing, 2 bad usage, budget or config, or an INPUT that does
+    not exist.
 
     \b
     Examples:
@@ -82,7 +86,7 @@ def check(
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
-    budget = load_budget(budget_path)  # a bad budget fails before any replay
+    budget = load_budget(budget_path, allow_empty=allow_empty)  # fails before any replay
     protected = config_files(configs)  # so does a bad config
     for path in local_paths(inputs):
         if not os.path.lexists(path):

@@ -15,6 +15,7 @@ from pathlib import Path
 import click
 
 from medkit_replay.commands import (
+    allow_empty_option,
     config_option,
     executor_options,
     input_argument,
@@ -37,6 +38,7 @@ DEFAULT_OUT = Path("fleet-report")
     default=None,
     help="Fault budget YAML checked on every run (the budget column).",
 )
+@allow_empty_option()
 @executor_options(
     "Kill a run that takes longer and report it as failed (runs in worker processes)."
 )
@@ -53,6 +55,7 @@ def fleet(
     input_dirs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
     budget: Path | None,
+    allow_empty: bool,
     jobs: int | None,
     dask_address: str | None,
     timeout: float | None,
@@ -63,8 +66,8 @@ def fleet(
 
     Recordings: rosbag2 folders, bare .mcap and .db3 files, ROS 1 .bag files, .jsonl scripts.
     A recording that cannot be replayed, times out or whose worker dies is reported in its
-    row; the others still run. Exit status: 1 when --budget is given and a run failed it or
-    failed at all.
+    row; the others still run. Exit status: 1 when --budget is given and a run failed it
+    (nothing replayed fails it too, unless --allow-empty) or failed at all.
 
     \b
     Examples:
@@ -89,7 +92,7 @@ def fleet(
     if budget is not None:
         from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
 
-        parsed_budget = load_budget(budget)
+        parsed_budget = load_budget(budget, allow_empty=allow_empty)
     from medkit_replay.fleet.report import (  # noqa: PLC0415  # pandas: only when it runs
         FILES,
         tabulated,

@@ -13,7 +13,13 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option, executor_options, input_argument, local_paths
+from medkit_replay.commands import (
+    allow_empty_option,
+    config_option,
+    executor_options,
+    input_argument,
+    local_paths,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import warn
@@ -36,6 +42,7 @@ from medkit_replay.outputs.console import warn
     default=None,
     help="Fault budget YAML checked on every variant x input (the budget columns).",
 )
+@allow_empty_option()
 @executor_options("Kill a job (one input, a share of the grid) that takes longer; its rows say so.")
 @click.option(
     "--out",
@@ -58,6 +65,7 @@ def sweep(
     configs: tuple[Path, ...],
     varies: tuple[str, ...],
     budget: Path | None,
+    allow_empty: bool,
     jobs: int | None,
     dask_address: str | None,
     timeout: float | None,
@@ -70,7 +78,8 @@ def sweep(
     The grid is every combination of the --vary values, each over the layered --config files;
     any parameter of any node may vary, file-valued ones too (paths relative to the current
     folder). Each input is read once per worker and bridge setting, its requests fed to every
-    variant. Exit status: 1 when --budget is given and a variant failed it on some input.
+    variant. Exit status: 1 when --budget is given and a variant failed it on some input
+    (nothing replayed fails it too, unless --allow-empty).
 
     \b
     Examples:
@@ -106,7 +115,7 @@ def sweep(
     if budget is not None:
         from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
 
-        parsed_budget = load_budget(budget)
+        parsed_budget = load_budget(budget, allow_empty=allow_empty)
     varied_files = [
         Path(str(s.value))
         for v in grid.variants
@@ -172,6 +181,7 @@ def sweep(
                 outcome.failed,
                 out_dir,
                 budget=parsed_budget is not None,
+                over_budget=outcome.over,
             )
             print_summary(sys.stdout, parts)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)

@@ -53,7 +53,8 @@ class RunSummary:
             CONFIRMED, in the order the heals happened.
         warnings: how many warnings the replay gave.
         budget: the budget verdict, ``pass`` or ``fail``; None when no budget was checked.
-        budget_failures: the names of the budget's rules that did not hold, in budget order.
+        budget_failures: the names of the budget's rules that did not hold, in budget order;
+            or one line saying what was missing when nothing was replayed.
         error: why the run failed (one line), None when it did not.
     """
 
@@ -156,7 +157,7 @@ def run_one(
         path: the recording (any input ``analyze`` takes).
         configs: ROS 2 parameter files, later ones overriding earlier ones.
         budget: a fault budget (``medkit_replay.checks.load_budget``) to check the run
-            against with ``medkit_replay.checks.evaluate``, as ``check`` does.
+            against, as ``check`` does (``medkit_replay.checks.failed_rules``).
         label: how the summary names the recording, also in its error (default: ``path``);
             a cluster is sent absolute paths but reports the paths as they were found.
 
@@ -171,9 +172,9 @@ def run_one(
         result = replay([recording], list(configs))
         summary = summarize(shown, kind, result)
         if budget is not None:
-            from medkit_replay.checks import evaluate  # noqa: PLC0415  # only with a budget
+            from medkit_replay.checks import failed_rules  # noqa: PLC0415  # only with a budget
 
-            failures = tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
+            failures = failed_rules(budget, result)
             verdict = "fail" if failures else "pass"
             summary = replace(summary, budget=verdict, budget_failures=failures)
         problem = summary_problem(summary)

@@ -19,7 +19,6 @@ from medkit_replay.engine.timeline import Timeline
 from medkit_replay.errors import InputError
 from medkit_replay.evidence import EvidenceOptions, collect_evidence
 from medkit_replay.inputs import is_remote, open_recording
-from medkit_replay.inputs.selection import LOG_TYPE
 from medkit_replay.model import (
     CLEAR_ROWS,
     EVENT_ROWS,
@@ -35,9 +34,11 @@ from medkit_replay.model import (
 )
 from medkit_replay.parity import compare, compare_responses, suggest_action_sources
 from medkit_replay.pipeline.assemble import assemble_result
+from medkit_replay.pipeline.consumption import consumption
 from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Request, Router, recorded_report_codes
+from medkit_replay.result import LOG_BRIDGE_HINT
 from medkit_replay.spool import Row, SpillListener, Spool
 
 if TYPE_CHECKING:
@@ -48,8 +49,9 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.model import InputSummary
     from medkit_replay.pipeline.loop import Clock
+    from medkit_replay.pipeline.routing import Handler
     from medkit_replay.pipeline.tracing import Tracer
-    from medkit_replay.result import Result
+    from medkit_replay.result import Consumption, Result
     from medkit_replay.trace import FaultTrace
 
 __all__ = ["PROGRESS_EVERY", "Pass", "Phase", "Progress", "replay", "replay_pass"]
@@ -175,26 +177,23 @@ def replay(
                 f"{topic}: {count} call(s) recorded without their request (metadata-only service "
                 "introspection); they cannot be replayed"
             )
+    consumed = run.consumed
     if messages == 0:
-        rosout = router.log is not None
-        rosout_topic = router.log.topic if router.log is not None else "/rosout"
-        logs = sum(
-            t.messages
-            for s in summaries
-            for t in s.topics
-            if t.topic == rosout_topic and t.type == LOG_TYPE
-        )
+        rosout_topic = consumed.rosout_topic
+        logs = sum(use.messages for use in consumed.unread if use.origin == "log_bridge")
         off = (
             f"; {rosout_topic} holds {logs} log message(s), which the log bridge would read, "
-            "but it is off (add a log_bridge section to the config, or set medkit_replay: "
-            "{enable_log_bridge: true})"
-            if logs and not rosout
+            f"but it is off (add a log_bridge section to the config, or set {LOG_BRIDGE_HINT})"
+            if logs
             else ""
         )
         warnings.append(
             "no topic the replay reads was found (action status, "
-            f"{router.diagnostic.topic}, ReportFault/ClearFault service events, fault manager "
-            "events" + (f", {rosout_topic}" if rosout else "") + "); the report is empty" + off
+            f"{consumed.diagnostics_topic}, ReportFault/ClearFault service events, fault manager "
+            "events"
+            + (f", {rosout_topic}" if consumed.log_bridge else "")
+            + "); the report is empty"
+            + off
         )
     parity: dict[str, object] | None = None
     if len(router.recorded_events):
@@ -227,6 +226,7 @@ def replay(
         parity,
         (events, transitions, reports, clears),
         config,
+        consumed,
     )
     found = collect_evidence(
         snapshots,
@@ -270,12 +270,14 @@ class Pass:
         gate: the double-counting gate, with what it withheld.
         warnings: the recording's own warnings (damage, refusals).
         summaries: one summary per input.
+        consumed: which paths into the fault manager took how much of the recording.
     """
 
     messages: int
     gate: Gate
     warnings: list[str]
     summaries: tuple[InputSummary, ...]
+    consumed: Consumption
 
 
 def replay_pass(
@@ -318,7 +320,10 @@ def replay_pass(
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None
         )
-        messages = replay_loop(recording, meter, clock, router, gate, spools, tracer)
+        routes: dict[tuple[str, str, str], Handler | None] = {}
+        messages = replay_loop(recording, meter, clock, router, gate, spools, tracer, routes)
         if meter is not None:
             meter.finish(messages, clock.last_ns)
-        return Pass(messages, gate, list(recording.warnings), tuple(recording.inputs))
+        summaries = recording.inputs
+        consumed = consumption(router, routes, summaries, messages)
+        return Pass(messages, gate, list(recording.warnings), summaries, consumed)

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
         ReportRecord,
         Transition,
     )
+    from medkit_replay.result import Consumption
     from medkit_replay.spool import Spool
 
 
@@ -36,6 +37,7 @@ def assemble_result(
     parity: dict[str, object] | None,
     logs: tuple[Spool[FaultEvent], Spool[Transition], Spool[ReportRecord], Spool[ClearRecord]],
     config: dict[str, object],
+    consumed: Consumption | None = None,
 ) -> Result:
     events, transitions, reports, clears = logs
     faults = manager.faults()
@@ -79,4 +81,5 @@ def assemble_result(
         warnings=tuple(warnings + output.warnings),
         summary=summary,
         config=config,
+        consumed=consumed,
     )

@@ -43,10 +43,12 @@ def replay_loop(
     gate: Gate,
     spools: Sequence[Spool[Any]] = (),
     tracer: Tracer | None = None,
+    routes: dict[tuple[str, str, str], Handler | None] | None = None,
 ) -> int:
     """Every message, in time order, to its bridge (field by field into the manager, which
     records rows) or as request objects to the gate; timers run before each message's time.
-    ``spools`` are settled now and then.
+    ``spools`` are settled now and then. ``routes`` is left holding the bridge handler chosen
+    for every (role, topic, type) met (None: to the router's requests).
 
     A ``tracer`` (``explain``) sees every message and request on the way and forwards them."""
     messages = 0
@@ -58,7 +60,7 @@ def replay_loop(
     if tracer is not None:
         report, apply = tracer.sink(report), tracer.apply(apply)
         tuples = tracer.messages(tuples, recording)
-    handlers: dict[tuple[str, str, str], Handler | None] = {}
+    handlers: dict[tuple[str, str, str], Handler | None] = {} if routes is None else routes
     due = timeline.due_ns()
     t_ns: int | None = None
     for t_ns, input_index, topic, msgtype, role, msg in tuples:

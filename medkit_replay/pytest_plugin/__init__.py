@@ -13,7 +13,9 @@ Assertion helpers (import them from this module): :func:`assert_confirmed`,
 :func:`assert_matches_golden`. Their failures show the fault's timeline (status changes and
 FaultEvents) or the diff with the golden report.
 
-Option: ``--update-golden`` rewrites golden reports that differ (or are missing) instead of failing.
+Options: ``--update-golden`` rewrites golden reports that differ (or are missing) instead of
+failing; ``--allow-empty-replay`` lets :func:`assert_within_budget` pass a replay in which nothing
+reached the fault manager (as ``--allow-empty`` does for ``check``).
 
 Loaded into every pytest session of an environment where medkit-replay is installed, so it does
 nothing until one of its fixtures or helpers is used: no import of the replay, no output.

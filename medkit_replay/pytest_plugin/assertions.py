@@ -10,7 +10,7 @@ import re
 from typing import TYPE_CHECKING
 
 from medkit_replay.model import NS_PER_SEC
-from medkit_replay.pytest_plugin.session import keeping_modules
+from medkit_replay.pytest_plugin.session import empty_allowed, keeping_modules
 from medkit_replay.pytest_plugin.timeline import clean, fault_timeline, recording_start_ns
 from medkit_replay.text import seconds
 
@@ -166,19 +166,36 @@ def assert_status(result: Result, fault_code: str, status: str) -> None:
         )
 
 
-def assert_within_budget(result: Result, budget_path: PathLike) -> None:
+def assert_within_budget(
+    result: Result, budget_path: PathLike, *, allow_empty: bool | None = None
+) -> None:
     """Assert that the result keeps the fault budget in ``budget_path`` (the budget YAML of
     ``medkit-replay check``, docs/budgets.md). The failure message gives the verdict of every
     rule that failed, its offending faults, and their timelines.
+
+    A replay in which nothing reached the fault manager fails, whatever the rules, with one
+    line saying what was missing, unless ``allow_empty`` (None: the ``--allow-empty-replay``
+    option of the pytest run).
 
     Raises:
         medkit_replay.errors.ConfigError: the budget file is missing or invalid.
     """
     __tracebackhide__ = True
+    allowed = empty_allowed() if allow_empty is None else allow_empty
     with keeping_modules():
-        from medkit_replay.checks import evaluate, load_budget  # noqa: PLC0415  # only when used
+        from medkit_replay.checks import (  # noqa: PLC0415  # only when used
+            evaluate,
+            load_budget,
+            nothing_replayed,
+        )
 
-        budget = load_budget(budget_path)
+        budget = load_budget(budget_path, allow_empty=allowed)
+        empty = nothing_replayed(budget, result)
+        if empty is not None:
+            raise AssertionError(
+                f"fault budget {clean(budget.title)} not checked ({clean(budget_path)}): "
+                f"{clean(empty)}"
+            )
         verdicts = evaluate(budget, result)
     failed = [v for v in verdicts if not v.passed]
     if not failed:

@@ -1,8 +1,9 @@
 """The plugin's pytest hooks and its state per process: the sessions running, the modules kept.
 
-``--update-golden`` is read from the innermost running session (pytester nests sessions). The
-modules the replays, budgets and goldens import are kept here and handed back to every later
-session, so that none is imported twice in one process (see the package's docstring).
+``--update-golden`` and ``--allow-empty-replay`` are read from the innermost running session
+(pytester nests sessions). The modules the replays, budgets and goldens import are kept here and
+handed back to every later session, so that none is imported twice in one process (see the
+package's docstring).
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ def _restore_modules() -> None:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """Add ``--update-golden``."""
+    """Add ``--update-golden`` and ``--allow-empty-replay``."""
     group = parser.getgroup("medkit-replay", "medkit-replay regression tests")
     group.addoption(
         "--update-golden",
@@ -59,6 +60,14 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         default=False,
         dest="medkit_replay_update_golden",
         help="medkit-replay: write golden reports that differ or are missing instead of failing.",
+    )
+    group.addoption(
+        "--allow-empty-replay",
+        action="store_true",
+        default=False,
+        dest="medkit_replay_allow_empty",
+        help="medkit-replay: let assert_within_budget pass a replay in which nothing reached "
+        "the fault manager (it fails by default).",
     )
 
 
@@ -90,6 +99,13 @@ def update_requested() -> bool:
     if not _configs:
         return False
     return bool(_configs[-1].getoption("medkit_replay_update_golden"))
+
+
+def empty_allowed() -> bool:
+    """``--allow-empty-replay`` was given to the innermost running session."""
+    if not _configs:
+        return False
+    return bool(_configs[-1].getoption("medkit_replay_allow_empty"))
 
 
 def note_updated(path: Path) -> None:

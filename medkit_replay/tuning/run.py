@@ -147,7 +147,7 @@ def _run_group(
             run.manager, codes, passed.messages, variant_id, job.label, len(passed.warnings)
         )
         if job.budget is not None:
-            from medkit_replay.checks import evaluate  # noqa: PLC0415  # only with a budget
+            from medkit_replay.checks import failed_rules  # noqa: PLC0415  # only with a budget
 
             events, transitions, reports, clears = run.logs
             result = assemble_result(
@@ -160,8 +160,9 @@ def _run_group(
                 None,
                 (events, transitions, reports, clears),
                 {},
+                passed.consumed,
             )
-            failures = [v.rule.name for v in evaluate(job.budget, result) if not v.passed]
+            failures = failed_rules(job.budget, result)
             row = replace(
                 row, budget="fail" if failures else "pass", budget_failures=";".join(failures)
             )

@@ -106,13 +106,23 @@ class _Ordered:
             self.next += 1
 
 
+MAX_OVER_KEPT = 100
+"""Distinct (input, budget failures) pairs a sweep keeps for its summary; runs.csv has all."""
+
+
 @dataclass(frozen=True, slots=True)
 class Outcome:
-    """What a sweep leaves for the summary and the page."""
+    """What a sweep leaves for the summary and the page.
+
+    Attributes:
+        over: (input, budget failures, variants) for the first MAX_OVER_KEPT distinct ways an
+            input failed the budget, with how many variants failed it so.
+    """
 
     variants: tuple[VariantTotal, ...]
     codes: tuple[CodeTotal, ...]
     failed: tuple[RunRow, ...]
+    over: tuple[tuple[str, str, int], ...] = ()
 
 
 def _columns(grid: Grid, names: Sequence[str]) -> list[str]:
@@ -146,6 +156,7 @@ def run_sweep(
     }
     totals = Totals(grid.variants)
     failed: list[RunRow] = []
+    over: dict[tuple[str, str], int] = {}
     writers: list[TableWriter] = []
 
     def open_writers() -> None:
@@ -170,6 +181,9 @@ def run_sweep(
             totals.add_run(row)
             if row.error:
                 failed.append(row)
+            key = (row.input, row.budget_failures)
+            if row.budget == "fail" and (key in over or len(over) < MAX_OVER_KEPT):
+                over[key] = over.get(key, 0) + 1
             if writers:
                 values = run_values(row)
                 writers[0].write((values[0], *settings[row.variant], *values[1:]))
@@ -204,7 +218,8 @@ def run_sweep(
         raise
     for writer in writers:
         writer.__exit__(None, None, None)
-    return Outcome(tuple(variant_totals), code_totals, tuple(failed))
+    kept = tuple((path, why, n) for (path, why), n in over.items())
+    return Outcome(tuple(variant_totals), code_totals, tuple(failed), kept)
 
 
 def _kinds(grid: Grid, record: type[Any]) -> dict[str, str]:

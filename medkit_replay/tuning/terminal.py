@@ -42,8 +42,10 @@ def summary_renderables(
     out_dir: Path | None,
     *,
     budget: bool,
+    over_budget: Sequence[tuple[str, str, int]] = (),
 ) -> list[RenderableType]:
-    """What the terminal summary shows, as rich renderables."""
+    """What the terminal summary shows, as rich renderables; ``over_budget``: (input, budget
+    failures, variants) of the ways inputs failed the budget."""
     head = Text()
     head.append("sweep: ", style="bold")
     head.append(f"{len(totals):,} variant(s) x {inputs:,} input(s)")
@@ -88,6 +90,14 @@ def summary_renderables(
     if len(totals) > MAX_VARIANT_ROWS:
         more = len(totals) - MAX_VARIANT_ROWS
         parts.append(Text(f"... {more:,} more variants in variants.csv", style="dim"))
+    if over_budget:
+        parts.append(Text("over budget:", style="bold red"))
+        for path, why, variants in over_budget[:MAX_ERROR_ROWS]:
+            shown = f"{path}: {why} ({variants:,} variant{'' if variants == 1 else 's'})"
+            parts.append(Text("  " + printable(shown)))
+        if len(over_budget) > MAX_ERROR_ROWS:
+            more = len(over_budget) - MAX_ERROR_ROWS
+            parts.append(Text(f"  ... {more:,} more in runs.csv"))
     if failed:
         parts.append(Text("not replayed:", style="bold red"))
         for row in failed[:MAX_ERROR_ROWS]:
