@@ -51,7 +51,7 @@ def _restore_modules() -> None:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """Add ``--update-golden``."""
+    """Add ``--update-golden`` and ``--golden-max-report-mb``."""
     group = parser.getgroup("medkit-replay", "medkit-replay regression tests")
     group.addoption(
         "--update-golden",
@@ -59,6 +59,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         default=False,
         dest="medkit_replay_update_golden",
         help="medkit-replay: write golden reports that differ or are missing instead of failing.",
+    )
+    group.addoption(
+        "--golden-max-report-mb",
+        type=int,
+        default=None,
+        dest="medkit_replay_max_report_mb",
+        metavar="MB",
+        help="medkit-replay: largest golden report read, plain or decompressed, in MiB "
+        "(default 1024, or MEDKIT_REPLAY_MAX_REPORT_MB).",
     )
 
 
@@ -90,6 +99,18 @@ def update_requested() -> bool:
     if not _configs:
         return False
     return bool(_configs[-1].getoption("medkit_replay_update_golden"))
+
+
+def golden_size_limit() -> int | None:
+    """``--golden-max-report-mb`` in bytes, or None when not given (the default limit)."""
+    if not _configs:
+        return None
+    mb = _configs[-1].getoption("medkit_replay_max_report_mb")
+    if mb is None:
+        return None
+    if int(mb) < 1:
+        raise pytest.UsageError("--golden-max-report-mb must be 1 or more")
+    return int(mb) * 1024 * 1024
 
 
 def note_updated(path: Path) -> None:
