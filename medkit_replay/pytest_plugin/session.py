@@ -75,6 +75,9 @@ def pytest_configure(config: pytest.Config) -> None:
     """Remember the session's config (for the update flag of the module-level helpers), and
     hand it the replay's modules if an earlier session in this process imported them."""
     _restore_modules()
+    mb = config.getoption("medkit_replay_max_report_mb", None)
+    if mb is not None and mb < 1:
+        raise pytest.UsageError("--golden-max-report-mb must be 1 or more")
     config.stash[_updated_key] = []
     _configs.append(config)
 
@@ -106,11 +109,7 @@ def golden_size_limit() -> int | None:
     if not _configs:
         return None
     mb = _configs[-1].getoption("medkit_replay_max_report_mb")
-    if mb is None:
-        return None
-    if int(mb) < 1:
-        raise pytest.UsageError("--golden-max-report-mb must be 1 or more")
-    return int(mb) * 1024 * 1024
+    return None if mb is None else int(mb) * 1024 * 1024
 
 
 def note_updated(path: Path) -> None:
