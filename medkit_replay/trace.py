@@ -218,23 +218,26 @@ class FaultTrace:
         """Items the replay made for the code, kept or not (0: the code never appeared)."""
         return len(self.items) + self.before + self.after + self.left_out
 
-    def add(self, item: TraceItem, at: int | None = None) -> None:
-        """Keep ``item`` (at position ``at``, else last) when it lies in the stretch told and
-        the story has room; else count it."""
-        t_ns = (
-            item.t_ns if isinstance(item, HeldRequest | CorrelationDecision) else item.record.t_ns
-        )
+    def takes(self, t_ns: int) -> bool:
+        """Whether an item at ``t_ns`` lies in the stretch told and the story has room for it;
+        if not, it is counted (the caller need not build it)."""
         at_ns, from_ns = self.at_ns, self.from_ns
         if at_ns is not None and t_ns > at_ns:
             self.after += 1
-            return
+            return False
         if from_ns is not None and t_ns < from_ns:
             self.before += 1
-            return
+            return False
         if len(self.items) >= self.limit:
             if self.left_out == 0:
                 self.left_out_from_ns = t_ns
             self.left_out += 1
+            return False
+        return True
+
+    def add(self, item: TraceItem, at: int | None = None) -> None:
+        """Keep ``item`` (at position ``at``, else last) if :meth:`takes` its time."""
+        if not self.takes(item_time(item)):
             return
         if at is None:
             self.items.append(item)

@@ -7,7 +7,7 @@ unchanged, and keeps what concerns the traced code; a replay without it is untou
 from __future__ import annotations
 
 from dataclasses import fields
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from medkit_replay.bridges import provenance
 from medkit_replay.inputs.script import SCRIPT_TYPE
@@ -240,9 +240,12 @@ class Tracer:
         return self.manager.snapshot(fault) if fault is not None else None
 
     def _report(self, row: Row) -> None:
+        if not self.trace.takes(cast("int", row[0])):  # its t_ns: not decoded when not told
+            self._pending = None
+            return
         record = REPORT_ROWS.decode(row)
         resolver = self.manager.resolver
-        self.trace.add(
+        self.trace.items.append(
             TracedReport(
                 record=record,
                 message=self._pending,
@@ -254,10 +257,14 @@ class Tracer:
         self._pending = None
 
     def _transition(self, row: Row) -> None:
-        self.trace.add(TracedTransition(record=TRANSITION_ROWS.decode(row), state=self._snapshot()))
+        if self.trace.takes(cast("int", row[0])):
+            self.trace.items.append(
+                TracedTransition(record=TRANSITION_ROWS.decode(row), state=self._snapshot())
+            )
 
     def _event(self, row: Row) -> None:
-        self.trace.add(TracedEvent(record=EVENT_ROWS.decode(row)))
+        if self.trace.takes(cast("int", row[0])):
+            self.trace.items.append(TracedEvent(record=EVENT_ROWS.decode(row)))
 
     def _decided(self, t_ns: int, fault_code: str, result: CorrelationResult) -> None:
         code = self.code
