@@ -107,15 +107,14 @@ def explain(
     )
     from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
-    from medkit_replay.trace import FaultTrace  # noqa: PLC0415
+    from medkit_replay.trace import DEFAULT_STORY_LIMIT, FaultTrace  # noqa: PLC0415
 
     trace = FaultTrace(
         fault_code=code,
         at_offset_ns=_at_offset_ns(at),
         from_offset_ns=_at_offset_ns(from_, "--from"),
+        limit=limit if limit is not None else DEFAULT_STORY_LIMIT,
     )
-    if limit is not None:
-        trace.limit = limit
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
         result = replay(
