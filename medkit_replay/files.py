@@ -118,23 +118,19 @@ def read_limited_text(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> str
     return read_limited(path, limit).decode("utf-8")
 
 
-def max_report_bytes(mb: int | None = None) -> int:
-    """The report size limit in bytes: ``mb`` MiB when given, else MEDKIT_REPLAY_MAX_REPORT_MB,
-    else MAX_REPORT_MB.
+def max_report_bytes() -> int:
+    """The report size limit in bytes: MEDKIT_REPLAY_MAX_REPORT_MB MiB when set, else
+    MAX_REPORT_MB.
 
     Raises:
         ValueError: the variable is not a whole number of MiB, at least 1 (said in one line).
     """
-    if mb is None:
-        text = os.environ.get(MAX_REPORT_ENV, "").strip()
-        if not text:
-            return MAX_REPORT_MB * MIB
-        if not text.isdigit() or int(text) < 1:
-            raise ValueError(
-                f"{MAX_REPORT_ENV}={text[:40]!r} is not a whole number of MiB, 1 or more"
-            )
-        mb = int(text)
-    return mb * MIB
+    text = os.environ.get(MAX_REPORT_ENV, "").strip()
+    if not text:
+        return MAX_REPORT_MB * MIB
+    if not text.isdigit() or int(text) < 1:
+        raise ValueError(f"{MAX_REPORT_ENV}={text[:40]!r} is not a whole number of MiB, 1 or more")
+    return int(text) * MIB
 
 
 def report_limit_text(limit: int) -> str:
