@@ -22,10 +22,17 @@ def is_remote(text: str | os.PathLike[str]) -> bool:
     return isinstance(text, str) and _REMOTE.match(text) is not None
 
 
-# A parameter file, correlation file, budget or metadata.yaml is a few KB; a report of a
-# long mission a few hundred MB. Anything past these is not what the user meant to give.
-MAX_TEXT_FILE_BYTES = 64 * 1024 * 1024
-MAX_REPORT_FILE_BYTES = 2 * 1024 * 1024 * 1024
+# A parameter file, correlation file, budget or metadata.yaml is a few KB. Anything past this
+# is not what the user meant to give.
+MIB = 1024 * 1024
+MAX_TEXT_FILE_BYTES = 64 * MIB
+MAX_REPORT_MB = 1024
+"""The largest JSON report read back (``diff``, golden reports), in MiB of text: plain, or once
+decompressed. The report grows with the recording (about 80 MB for the 10-minute sample mission,
+591 MB for the one-hour one), so this holds some 100 minutes of a dense mission; ``diff
+--max-report-mb`` (or MEDKIT_REPLAY_MAX_REPORT_MB) and pytest's ``--golden-max-report-mb``
+raise it."""
+MAX_REPORT_ENV = "MEDKIT_REPLAY_MAX_REPORT_MB"
 
 _KINDS = (
     (stat.S_ISDIR, "a directory"),
@@ -109,6 +116,26 @@ def read_limited(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> bytes:
 def read_limited_text(path: Path | str, limit: int = MAX_TEXT_FILE_BYTES) -> str:
     """``read_limited`` decoded as UTF-8 (UnicodeDecodeError when it is not)."""
     return read_limited(path, limit).decode("utf-8")
+
+
+def max_report_bytes() -> int:
+    """The report size limit in bytes: MEDKIT_REPLAY_MAX_REPORT_MB MiB when set, else
+    MAX_REPORT_MB.
+
+    Raises:
+        ValueError: the variable is not a whole number of MiB, at least 1 (said in one line).
+    """
+    text = os.environ.get(MAX_REPORT_ENV, "").strip()
+    if not text:
+        return MAX_REPORT_MB * MIB
+    if not text.isdigit() or int(text) < 1:
+        raise ValueError(f"{MAX_REPORT_ENV}={text[:40]!r} is not a whole number of MiB, 1 or more")
+    return int(text) * MIB
+
+
+def report_limit_text(limit: int) -> str:
+    """A report size limit as the user sets it (MiB), with how to raise it."""
+    return f"{limit / MIB:,.0f} MiB (raise it with --max-report-mb or {MAX_REPORT_ENV})"
 
 
 REPORT_COMPRESSIONS = {".gz": "gzip", ".zst": "zstd"}

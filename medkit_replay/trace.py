@@ -22,6 +22,11 @@ if TYPE_CHECKING:
 
 MAX_ITEMS = 32
 """Key/value pairs or goals kept of one recorded message (the rest are counted)."""
+DEFAULT_STORY_LIMIT = 10_000
+"""Trace items a story holds at most (``explain --limit``): reports, held requests, decisions,
+status changes, events and clears, each told in a line or two and kept until the story is
+written (a few KB each). 10,000 are some 3,000 reports of a flapping fault; the items past
+them are counted, and ``--from`` and ``--at`` choose the stretch told."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -142,6 +147,13 @@ TraceItem = (
 )
 
 
+def item_time(item: TraceItem) -> int:
+    """The bag time of a trace item."""
+    if isinstance(item, HeldRequest | CorrelationDecision):
+        return item.t_ns
+    return item.record.t_ns
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class StateAt:
     """The fault as the manager held it at one instant (``--at``).
@@ -167,16 +179,25 @@ class FaultTrace:
             None: not asked.
         origin_ns: the recording's start as the replay knew it on its first message: the
             earliest start an input declares, or that first message's time.
-        items: reports, held requests, correlation decisions, transitions, events and clears.
+        items: reports, held requests, correlation decisions, transitions, events and clears,
+            from ``from_offset_ns`` (``--from``) to ``at_offset_ns``, at most ``limit``.
         state_at: the fault at ``origin_ns + at_offset_ns`` (set once the replay got there),
             or at the last message when no ``--at`` was asked.
+        before: items before ``--from``, not kept; ``after``: items past ``--at``, not kept.
+        left_out: items past ``limit``, not kept; ``left_out_from_ns`` the first one's time.
     """
 
     fault_code: str
     at_offset_ns: int | None = None
+    from_offset_ns: int | None = None
+    limit: int = DEFAULT_STORY_LIMIT
     origin_ns: int | None = None
     items: list[TraceItem] = field(default_factory=list)
     state_at: StateAt | None = None
+    before: int = 0
+    after: int = 0
+    left_out: int = 0
+    left_out_from_ns: int | None = None
 
     @property
     def at_ns(self) -> int | None:
@@ -184,3 +205,41 @@ class FaultTrace:
         if self.at_offset_ns is None or self.origin_ns is None:
             return None
         return self.origin_ns + self.at_offset_ns
+
+    @property
+    def from_ns(self) -> int | None:
+        """The bag time of ``--from``, once the recording's start is known."""
+        if self.from_offset_ns is None or self.origin_ns is None:
+            return None
+        return self.origin_ns + self.from_offset_ns
+
+    @property
+    def seen(self) -> int:
+        """Items the replay made for the code, kept or not (0: the code never appeared)."""
+        return len(self.items) + self.before + self.after + self.left_out
+
+    def takes(self, t_ns: int) -> bool:
+        """Whether an item at ``t_ns`` lies in the stretch told and the story has room for it;
+        if not, it is counted (the caller need not build it)."""
+        at_ns, from_ns = self.at_ns, self.from_ns
+        if at_ns is not None and t_ns > at_ns:
+            self.after += 1
+            return False
+        if from_ns is not None and t_ns < from_ns:
+            self.before += 1
+            return False
+        if len(self.items) >= self.limit:
+            if self.left_out == 0:
+                self.left_out_from_ns = t_ns
+            self.left_out += 1
+            return False
+        return True
+
+    def add(self, item: TraceItem, at: int | None = None) -> None:
+        """Keep ``item`` (at position ``at``, else last) if :meth:`takes` its time."""
+        if not self.takes(item_time(item)):
+            return
+        if at is None:
+            self.items.append(item)
+        else:
+            self.items.insert(at, item)

@@ -18,7 +18,7 @@ import click
 from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
-from medkit_replay.files import REPORT_COMPRESSIONS, open_regular
+from medkit_replay.files import MIB, REPORT_COMPRESSIONS, open_regular
 
 if TYPE_CHECKING:
     from medkit_replay.diffing import ReportDiff
@@ -37,7 +37,9 @@ def is_report_path(path: Path | str) -> bool:
 class _Side:
     """One side of the diff: a report read from a file, or a recording replayed now."""
 
-    def __init__(self, path: Path | str, configs: tuple[Path, ...], *, quiet: bool) -> None:
+    def __init__(
+        self, path: Path | str, configs: tuple[Path, ...], *, quiet: bool, limit: int
+    ) -> None:
         from medkit_replay.diffing import read_report  # noqa: PLC0415
         from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
         from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
@@ -46,7 +48,7 @@ class _Side:
         self.path = path
         self.result: Result | None = None
         if isinstance(path, Path) and is_report_path(path):
-            self.report = read_report(path)
+            self.report = read_report(path, limit)
             return
         bar = progress_bar(sys.stderr, quiet=quiet)
         with bar if bar is not None else nullcontext():
@@ -58,7 +60,7 @@ class _Side:
         return str(self.path) if self.result is None else f"{self.path} (replayed now)"
 
 
-def _write_baseline(baseline: Path, current: _Side) -> None:
+def _write_baseline(baseline: Path, current: _Side, limit: int) -> None:
     """Replace the baseline with the current report, atomically (a crash leaves the old one),
     compressed as the baseline's name says; the baseline keeps its permission bits."""
     from medkit_replay.diffing.reports import report_bytes  # noqa: PLC0415
@@ -77,7 +79,7 @@ def _write_baseline(baseline: Path, current: _Side) -> None:
                     shutil.copyfileobj(source, raw)
             else:
                 assert isinstance(current.path, Path)  # read from a file: a URL is replayed
-                text = report_bytes(current.path)
+                text = report_bytes(current.path, limit)
                 with compressed(raw, report_compression(baseline)) as stream:
                     stream.write(text)
     except OSError as err:
@@ -130,6 +132,15 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
     is_flag=True,
     help="Rewrite BASELINE (a .json report) with the current report; exit 0.",
 )
+@click.option(
+    "--max-report-mb",
+    "max_report_mb",
+    type=click.IntRange(min=1),
+    default=None,
+    metavar="MB",
+    help="Largest report read, plain or decompressed, in MiB (default 1024, or "
+    "MEDKIT_REPLAY_MAX_REPORT_MB).",
+)
 @click.option("--quiet", is_flag=True, help="No human output, no progress bar.")
 @click.pass_context
 def diff(
@@ -140,6 +151,7 @@ def diff(
     time_tolerance: float,
     json_out: str | None,
     update: bool,
+    max_report_mb: int | None,
     quiet: bool,
 ) -> None:
     """Compare CURRENT with BASELINE: faults, status changes, FaultEvents and clusters.
@@ -156,9 +168,11 @@ def diff(
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.diffing import diff_reports, tolerance_ns  # noqa: PLC0415
+    from medkit_replay.diffing.reports import report_size_limit  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap, write_text_atomic  # noqa: PLC0415
 
     tolerance = tolerance_ns(time_tolerance)
+    limit = report_size_limit(None if max_report_mb is None else max_report_mb * MIB)
     if json_out is not None and json_out != "-":
         refuse_overlap(
             [*local_paths([baseline, current]), *config_files(configs, check=False)],
@@ -172,14 +186,14 @@ def diff(
     notes: list[str] = []
     if configs and is_report_path(baseline) and is_report_path(current):
         notes.append("note: --config is not used: both sides are reports, nothing is replayed")
-    new = _Side(current, configs, quiet=quiet)
+    new = _Side(current, configs, quiet=quiet, limit=limit)
     if update and not baseline.exists():
-        _write_baseline(baseline, new)
+        _write_baseline(baseline, new, limit)
         if not quiet:
             out = sys.stderr if json_out == "-" else sys.stdout
             out.write(f"baseline created: {baseline}\n")
         return
-    old = _Side(baseline, configs, quiet=quiet)
+    old = _Side(baseline, configs, quiet=quiet, limit=limit)
     result = diff_reports(
         old.report,
         new.report,
@@ -188,7 +202,7 @@ def diff(
         current_name=new.name,
     )
     if update:
-        _write_baseline(baseline, new)
+        _write_baseline(baseline, new, limit)
         notes.append(f"baseline updated: {baseline}")
     document = result.to_json()
     if update:

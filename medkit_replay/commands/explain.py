@@ -25,11 +25,11 @@ class UnknownCodeError(MedkitReplayError):
     """The code asked for never appears in the recording (exit 2)."""
 
 
-def _at_offset_ns(at: float | None) -> int | None:
+def _at_offset_ns(at: float | None, option: str = "--at") -> int | None:
     if at is None:
         return None
     if not math.isfinite(at):
-        raise click.BadParameter(f"{at!r} is not a time in seconds", param_hint="'--at'")
+        raise click.BadParameter(f"{at!r} is not a time in seconds", param_hint=f"'{option}'")
     return round(at * NS_PER_SEC)
 
 
@@ -54,6 +54,22 @@ def _at_offset_ns(at: float | None) -> int | None:
     help="The robot's node graph, as for 'analyze --graph': the freeze frames and recordings "
     "the story tells that use the faulting node's own topics need it.",
 )
+@click.option(
+    "--from",
+    "from_",
+    type=float,
+    default=None,
+    metavar="SECONDS",
+    help="Start the story at this many seconds from the recording's start (what came before "
+    "is counted, not told).",
+)
+@click.option(
+    "--limit",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Tell at most this many reports, holds, decisions, status changes, events and clears "
+    "(default 10,000); the rest are counted, not kept.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Write the story as JSON records.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def explain(
@@ -62,6 +78,8 @@ def explain(
     configs: tuple[Path, ...],
     at: float | None,
     graph_file: Path | None,
+    from_: float | None,
+    limit: int | None,
     as_json: bool,
     quiet: bool,
 ) -> None:
@@ -89,9 +107,14 @@ def explain(
     )
     from medkit_replay.outputs.console import progress_bar  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
-    from medkit_replay.trace import FaultTrace  # noqa: PLC0415
+    from medkit_replay.trace import DEFAULT_STORY_LIMIT, FaultTrace  # noqa: PLC0415
 
-    trace = FaultTrace(fault_code=code, at_offset_ns=_at_offset_ns(at))
+    trace = FaultTrace(
+        fault_code=code,
+        at_offset_ns=_at_offset_ns(at),
+        from_offset_ns=_at_offset_ns(from_, "--from"),
+        limit=limit if limit is not None else DEFAULT_STORY_LIMIT,
+    )
     bar = progress_bar(sys.stderr, quiet=quiet)
     with bar if bar is not None else nullcontext():
         result = replay(
@@ -103,7 +126,7 @@ def explain(
                 graph=load_graph(graph_file) if graph_file is not None else None
             ),
         )
-    if not trace.items:
+    if not trace.seen:
         nearest = nearest_codes(code, known_codes(result))
         shown = ", ".join(printable(clip(c, MAX_CODE_SHOWN)) for c in nearest)
         raise UnknownCodeError(

@@ -18,13 +18,15 @@ import click
 from medkit_replay.commands import config_option, input_argument, local_paths
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
-from medkit_replay.outputs.console import echo
+from medkit_replay.outputs.console import echo, warn
 from medkit_replay.text import printable
 from medkit_replay.tuning.suggest import (
+    DEFAULT_MAX_PAIRS,
     DEFAULT_MIN_CONFIDENCE,
     DEFAULT_MIN_SUPPORT,
     DEFAULT_WINDOW_MS,
     Suggestion,
+    pairs_of,
     suggest,
 )
 
@@ -60,6 +62,14 @@ MAX_LISTED = 20
     help="Share of the runs with the later code that the pattern must explain.",
 )
 @click.option(
+    "--max-pairs",
+    type=click.IntRange(min=1),
+    default=DEFAULT_MAX_PAIRS,
+    show_default=True,
+    help="Pairs of codes weighed at most; past it, only the codes confirmed in the most runs are "
+    "paired (said in a warning).",
+)
+@click.option(
     "--out",
     "out_path",
     type=click.Path(path_type=Path, dir_okay=False),
@@ -83,6 +93,7 @@ def suggest_rules(
     window_ms: int,
     min_support: int,
     min_confidence: float,
+    max_pairs: int,
     out_path: Path | None,
     validate: bool,
     jobs: int | None,
@@ -125,7 +136,15 @@ def suggest_rules(
     run_jobs(jobs_list, partial(observe, configs=base), failed_observation, jobs=jobs, on_done=keep)
     runs = [run for run in observed if run is not None]
     good = [run.confirmations for run in runs if run.ok]
-    suggestion = suggest(good, window_ms, min_support, min_confidence)
+    suggestion = suggest(good, window_ms, min_support, min_confidence, max_pairs)
+    paired = suggestion.paired
+    if paired.dropped:
+        warn(
+            f"{paired.candidates:,} codes confirmed in at least {min_support} runs make "
+            f"{pairs_of(paired.candidates):,} pairs, more than --max-pairs {max_pairs:,}: only "
+            f"the {paired.kept:,} confirmed in the most runs were paired ({paired.dropped:,} "
+            "pairs dropped; raise --max-pairs to weigh them)"
+        )
     text = rules_yaml(suggestion)
     report = sys.stdout if out_path is not None else sys.stderr
     if out_path is not None:

@@ -59,6 +59,13 @@ from medkit_replay.outputs.console import warn
     default=None,
     help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
 )
+@click.option(
+    "--max-runs",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Replays (variants x recordings) run at most (default 20,000): a larger sweep is "
+    "refused before it starts.",
+)
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
 def sweep(
     inputs: tuple[Path | str, ...],
@@ -71,6 +78,7 @@ def sweep(
     timeout: float | None,
     out_dir: Path | None,
     html_path: Path | None,
+    max_runs: int | None,
     quiet: bool,
 ) -> None:
     """Replay INPUT... once per variant of a grid of settings and rank the variants.
@@ -95,7 +103,7 @@ def sweep(
     from medkit_replay.fleet.progress import fleet_progress  # noqa: PLC0415
     from medkit_replay.fleet.workers import default_jobs  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
-    from medkit_replay.tuning.grid import parse_vary  # noqa: PLC0415
+    from medkit_replay.tuning.grid import check_runs, parse_vary  # noqa: PLC0415
     from medkit_replay.tuning.sweep import (  # noqa: PLC0415
         TABLES,
         VARIANTS_FOLDER,
@@ -110,7 +118,15 @@ def sweep(
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
     config_paths = config_files(configs)
-    grid = checked_grid(configs, [parse_vary(spec) for spec in varies])
+    parsed = [parse_vary(spec) for spec in varies]
+    recordings = discover(inputs)
+    if not recordings:
+        raise InputError(
+            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
+            path=", ".join(str(d) for d in inputs),
+        )
+    check_runs(parsed, len(recordings), max_runs)  # before a variant is built
+    grid = checked_grid(configs, parsed)
     parsed_budget = None
     if budget is not None:
         from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
@@ -128,12 +144,6 @@ def sweep(
         outputs += [("--out", out_dir), ("--out", out_dir / VARIANTS_FOLDER)]
         outputs += [("--out", out_dir / f"{t}.{s}") for t in TABLES for s in ("csv", "parquet")]
     refuse_overlap(protected, outputs)
-    recordings = discover(inputs)
-    if not recordings:
-        raise InputError(
-            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
-            path=", ".join(str(d) for d in inputs),
-        )
     parquet = False
     if out_dir is not None:
         parquet = _has_pyarrow()

@@ -14,7 +14,12 @@ import zlib
 from typing import IO, TYPE_CHECKING
 
 from medkit_replay.errors import InputError
-from medkit_replay.files import MAX_REPORT_FILE_BYTES, FileRefusedError, open_regular
+from medkit_replay.files import (
+    FileRefusedError,
+    max_report_bytes,
+    open_regular,
+    report_limit_text,
+)
 from medkit_replay.inputs.jsonl import JsonRefusedError, loads_strict, locate_refusal
 
 if TYPE_CHECKING:
@@ -22,14 +27,15 @@ if TYPE_CHECKING:
     from pathlib import Path
 
 
-def read_report(path: Path) -> dict[str, object]:
+def read_report(path: Path, limit: int | None = None) -> dict[str, object]:
     """A JSON report from a file (checked by the diff, which names the file when it is not one).
 
-    Strict and bounded: a regular file of at most MAX_REPORT_FILE_BYTES, UTF-8, strict JSON
-    (no NaN or Infinity, no number too long, no lone surrogate); each refusal is one line.
+    Strict and bounded: a regular file of at most ``limit`` bytes (default: files.py's
+    max_report_bytes), plain or once decompressed, UTF-8, strict JSON (no NaN or Infinity, no
+    number too long, no lone surrogate); each refusal is one line.
     """
     shown = str(path)
-    data = report_bytes(path)
+    data = report_bytes(path, report_size_limit(limit))
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
@@ -59,46 +65,61 @@ def read_report(path: Path) -> dict[str, object]:
     return report
 
 
+def report_size_limit(limit: int | None = None) -> int:
+    """``limit``, or the default limit (MEDKIT_REPLAY_MAX_REPORT_MB, else MAX_REPORT_MB);
+    a bad variable is an input error."""
+    if limit is not None:
+        return limit
+    try:
+        return max_report_bytes()
+    except ValueError as err:
+        raise InputError(str(err)) from None
+
+
 _TOO_BIG = "a report of {:,} bytes is too large to load in the memory available"
 _MAYBE_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
 
 
-def report_bytes(path: Path) -> bytes | bytearray:
+def report_bytes(path: Path, limit: int) -> bytes | bytearray:
     """The report file's text as bytes, decompressed if it is gzip or zstd (by its first bytes):
-    a regular file within the bound, refused at once when it cannot be a report (it does not
-    start with '{'), so a huge or endless file is never read whole. Decompressed, it gets the
-    same bound, checked as it expands: a decompression bomb is refused, never held."""
+    a regular file of at most ``limit`` bytes, refused at once when it cannot be a report (it
+    does not start with '{'), so a huge or endless file is never read whole. Decompressed, it
+    gets the same bound, checked as it expands: a decompression bomb is refused, never held."""
     try:
         with open_regular(path) as stream:
             magic = stream.read(len(_ZSTD_MAGIC))
             stream.seek(0)
             if magic.startswith(_GZIP_MAGIC) or magic == _ZSTD_MAGIC:
-                return _decompressed(
-                    stream, path, "gzip" if magic.startswith(_GZIP_MAGIC) else "zstd"
-                )
+                compression = "gzip" if magic.startswith(_GZIP_MAGIC) else "zstd"
+                # Read twice: first counting, holding nothing, so that a bomb costs the time
+                # to expand ``limit`` bytes and no memory; then kept (checked again: the file
+                # may have changed in between).
+                _expand(stream, path, compression, limit, None)
+                stream.seek(0)
+                data = bytearray()  # no second copy of a large report
+                _expand(stream, path, compression, limit, data)
+                return data
             size = os.fstat(stream.fileno()).st_size
-            if size > MAX_REPORT_FILE_BYTES:
+            if size > limit:
                 raise InputError(
-                    f"a report of {size:,} bytes is larger than {MAX_REPORT_FILE_BYTES:,} bytes",
+                    f"a report of {size:,} bytes is larger than {report_limit_text(limit)}",
                     path=str(path),
                 )
             head = stream.read(_HEAD_BYTES)
-            if head.lstrip(b" \t\r\n")[:1] not in (b"{", b""):
+            if head.lstrip(_BLANK)[:1] not in (b"{", b""):
                 raise InputError(
                     "not a JSON report (it does not start with '{')", path=str(path), line=1
                 )
             try:
                 # read(n) allocates n bytes first: ask for what the file holds, plus one byte
                 # to notice a file that grew past the bound.
-                wanted = min(size, MAX_REPORT_FILE_BYTES) + 1 - len(head)
-                data = head + stream.read(max(wanted, 1))
+                wanted = min(size, limit) + 1 - len(head)
+                data_read = head + stream.read(max(wanted, 1))
             except MemoryError:
                 raise InputError(_TOO_BIG.format(size), path=str(path)) from None
-            if len(data) > MAX_REPORT_FILE_BYTES:  # it grew while being read
-                raise InputError(
-                    f"a report larger than {MAX_REPORT_FILE_BYTES:,} bytes", path=str(path)
-                )
-            return data
+            if len(data_read) > limit:  # it grew while being read
+                raise InputError(f"a report larger than {report_limit_text(limit)}", path=str(path))
+            return data_read
     except FileNotFoundError:
         raise InputError("no such report", path=str(path)) from None
     except IsADirectoryError:
@@ -110,17 +131,20 @@ def report_bytes(path: Path) -> bytes | bytearray:
 
 
 _HEAD_BYTES = 64 * 1024
-
-
+_BLANK = b" \t\r\n"
 _GZIP_MAGIC = b"\x1f\x8b"
 _ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
 _PIECE = 1024 * 1024
-# Compressed bytes fed to zstd at a time: what one feed can expand to stays some tens of MB.
-_ZSTD_FEED = 1024
+# Compressed bytes fed to zstd at a time: one feed expands to at most 8 MiB (RLE blocks).
+_ZSTD_FEED = 256
+# No ratio limit: real reports compress 66x (gzip) to 140x (zstd; 200,000 reports of one
+# flapping code), but a report of long repeated texts compresses past any ratio worth fixing,
+# and the counting read above already makes a bomb cost no memory; ``limit`` bounds the time.
 
 
 def _pieces(stream: IO[bytes], compression: str) -> Iterator[bytes]:
-    """The decompressed text a piece at a time; a cut or damaged stream raises."""
+    """The decompressed text a piece at a time, over every gzip member or zstd frame (as
+    ``gzip -d`` and ``zstd -d`` read what ``cat`` or ``pzstd`` made); damage raises."""
     if compression == "gzip":
         reader = gzip.GzipFile(fileobj=stream, mode="rb")  # a cut stream ends in EOFError
         while piece := reader.read(_PIECE):
@@ -130,45 +154,52 @@ def _pieces(stream: IO[bytes], compression: str) -> Iterator[bytes]:
 
     decompressor = zstandard.ZstdDecompressor().decompressobj()
     while fed := stream.read(_ZSTD_FEED):
-        if decompressor.eof:
-            raise EOFError("data after the end of the zstd frame")
-        yield decompressor.decompress(fed)
+        while fed:
+            if decompressor.eof:  # the next frame starts here (or a skippable one)
+                decompressor = zstandard.ZstdDecompressor().decompressobj()
+            yield decompressor.decompress(fed)
+            fed = decompressor.unused_data if decompressor.eof else b""
     if not decompressor.eof:
         raise EOFError("the zstd frame is cut short")
 
 
-def _decompressed(stream: IO[bytes], path: Path, compression: str) -> bytearray:
-    """A compressed report's text, read a piece at a time and refused as soon as it passes
-    MAX_REPORT_FILE_BYTES or shows it is no report."""
+def _expand(
+    stream: IO[bytes], path: Path, compression: str, limit: int, keep: bytearray | None
+) -> None:
+    """Decompress the report a piece at a time (into ``keep`` when given), refused as soon as
+    it passes ``limit`` bytes or shows it is no report."""
     # gzip.BadGzipFile is an OSError; a cut stream ends in EOFError.
     failures: tuple[type[BaseException], ...] = (OSError, EOFError, zlib.error)
     if compression == "zstd":
         import zstandard  # noqa: PLC0415  # only for zstd reports
 
         failures = (*failures, zstandard.ZstdError)
-    data = bytearray()
+    total = 0
+    started = False
     try:
         for piece in _pieces(stream, compression):
-            if not data and piece.lstrip(b" \t\r\n")[:1] not in (b"{", b""):
+            if not started and (text := piece.lstrip(_BLANK)):
+                if text[:1] != b"{":
+                    raise InputError(
+                        f"not a JSON report (its {compression} content does not start with '{{')",
+                        path=str(path),
+                        line=1,
+                    )
+                started = True
+            total += len(piece)
+            if total > limit:
                 raise InputError(
-                    f"not a JSON report (its {compression} content does not start with '{{')",
-                    path=str(path),
-                    line=1,
-                )
-            data += piece
-            if len(data) > MAX_REPORT_FILE_BYTES:
-                raise InputError(
-                    f"a {compression} report that expands past {MAX_REPORT_FILE_BYTES:,} bytes "
-                    "(refused: a report is never that large)",
+                    f"a {compression} report that expands past {report_limit_text(limit)}",
                     path=str(path),
                 )
+            if keep is not None:
+                keep += piece
     except failures as err:
         raise InputError(
             f"cannot decompress the {compression} report: {_why(err)}", path=str(path)
         ) from None
     except MemoryError:
-        raise InputError(_TOO_BIG.format(len(data)), path=str(path)) from None
-    return data  # a bytearray: no second copy of a large report
+        raise InputError(_TOO_BIG.format(total), path=str(path)) from None
 
 
 def _why(err: BaseException) -> str:

@@ -12,7 +12,7 @@ from medkit_replay.explaining.entries import ENTRY_BUILDERS, EntryBuilder, when
 from medkit_replay.explaining.evidence import evidence_entries
 from medkit_replay.explaining.lines import Entry, Line, part
 from medkit_replay.text import severity_name
-from medkit_replay.trace import CorrelationDecision, HeldRequest, TracedReport, TracedTransition
+from medkit_replay.trace import CorrelationDecision, TracedReport, TracedTransition, item_time
 
 if TYPE_CHECKING:
     from medkit_replay.explaining.lines import JSON
@@ -56,13 +56,6 @@ def _ordered(items: list[TraceItem], code: str) -> list[TraceItem]:
             out += sorted(waiting, key=lambda i: not isinstance(i, TracedTransition))
             waiting = []
     return out + waiting
-
-
-def item_time(item: TraceItem) -> int:
-    """The bag time of a trace item."""
-    if isinstance(item, HeldRequest | CorrelationDecision):
-        return item.t_ns
-    return item.record.t_ns
 
 
 FOLLOWERS = ("transition", "correlation", "event_withheld", "event")
@@ -248,9 +241,9 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
     """The story of ``trace.fault_code``, stopped at ``trace.at_ns`` when there is one.
 
     Raises:
-        ValueError: the trace holds nothing (the code never appeared).
+        ValueError: the trace holds and counts nothing (the code never appeared).
     """
-    if not trace.items:
+    if not trace.seen:
         raise ValueError(f"{trace.fault_code} never appears")
     start, end = result.span()
     origin_ns = start if start is not None else (trace.origin_ns or 0)
@@ -264,14 +257,18 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
         ENTRY_BUILDERS[type(item)](builder, item)
     entries = _with_evidence(
         _condense(builder.entries, origin_ns, trace.fault_code),
-        [
-            e
-            for e in evidence_entries(result, trace.fault_code, origin_ns)
-            if at_ns is None or e.t_ns <= at_ns
-        ],
+        [e for e in evidence_entries(result, trace.fault_code, origin_ns) if _told(e.t_ns, trace)],
     )
     state, state_fields = state_lines(trace.state_at, origin_ns, trace.fault_code)
     header, summary = _header(result, trace, builder.entries, origin_ns)
+    header += _told_lines(trace, origin_ns)
+    if trace.before or trace.left_out:  # only then: a whole story's JSON stays as it was
+        summary["left_out"] = {
+            "before_from": trace.before,
+            "past_limit": trace.left_out,
+            "past_limit_from_ns": trace.left_out_from_ns,
+            "limit": trace.limit,
+        }
     return Story(
         fault_code=trace.fault_code,
         origin_ns=origin_ns,
@@ -284,6 +281,43 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
         state=tuple(state),
         state_fields=state_fields,
     )
+
+
+def _told(t_ns: int, trace: FaultTrace) -> bool:
+    """Whether the stretch the story tells holds ``t_ns`` (``--from``, ``--at``, the cut)."""
+    at_ns, from_ns, cut_ns = trace.at_ns, trace.from_ns, trace.left_out_from_ns
+    return (
+        (at_ns is None or t_ns <= at_ns)
+        and (from_ns is None or t_ns >= from_ns)
+        and (cut_ns is None or t_ns < cut_ns)
+    )
+
+
+def _told_lines(trace: FaultTrace, origin_ns: int) -> list[Line]:
+    """What the story leaves out (``--from``, ``--limit``) and how to see it."""
+    lines: list[Line] = []
+    if trace.before:
+        lines.append(
+            (
+                part("from ", "kind"),
+                part(f"{when(trace.from_ns or origin_ns, origin_ns)} (--from): ", "plain"),
+                part(f"{trace.before:,} earlier item(s) not told", "dim"),
+            )
+        )
+    if trace.left_out:
+        start = trace.left_out_from_ns if trace.left_out_from_ns is not None else origin_ns
+        lines.append(
+            (
+                part("story cut ", "reject"),
+                part(
+                    f"after {trace.limit:,} items: {trace.left_out:,} more from "
+                    f"{when(start, origin_ns)} not told (narrow it with --from and --at, or "
+                    "raise --limit)",
+                    "plain",
+                ),
+            )
+        )
+    return lines
 
 
 def _with_evidence(entries: list[Entry], evidence: list[Entry]) -> list[Entry]:

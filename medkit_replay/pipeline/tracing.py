@@ -7,7 +7,7 @@ unchanged, and keeps what concerns the traced code; a replay without it is untou
 from __future__ import annotations
 
 from dataclasses import fields
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from medkit_replay.bridges import provenance
 from medkit_replay.inputs.script import SCRIPT_TYPE
@@ -139,7 +139,7 @@ class Tracer:
             if isinstance(request, ClearRequest) and len(clears) > before:
                 record = clears[before]
                 if record.fault_code == code or code in record.auto_cleared_codes:
-                    self.trace.items.insert(mark, TracedClear(record=record))
+                    self.trace.add(TracedClear(record=record), mark)
 
         return apply
 
@@ -187,7 +187,7 @@ class Tracer:
         if call is None:
             return
         t_ns, origin, topic, event_type, severity, description, source_id = call
-        self.trace.items.append(
+        self.trace.add(
             HeldRequest(
                 t_ns=t_ns,
                 origin=origin,
@@ -240,6 +240,9 @@ class Tracer:
         return self.manager.snapshot(fault) if fault is not None else None
 
     def _report(self, row: Row) -> None:
+        if not self.trace.takes(cast("int", row[0])):  # its t_ns: not decoded when not told
+            self._pending = None
+            return
         record = REPORT_ROWS.decode(row)
         resolver = self.manager.resolver
         self.trace.items.append(
@@ -254,12 +257,14 @@ class Tracer:
         self._pending = None
 
     def _transition(self, row: Row) -> None:
-        self.trace.items.append(
-            TracedTransition(record=TRANSITION_ROWS.decode(row), state=self._snapshot())
-        )
+        if self.trace.takes(cast("int", row[0])):
+            self.trace.items.append(
+                TracedTransition(record=TRANSITION_ROWS.decode(row), state=self._snapshot())
+            )
 
     def _event(self, row: Row) -> None:
-        self.trace.items.append(TracedEvent(record=EVENT_ROWS.decode(row)))
+        if self.trace.takes(cast("int", row[0])):
+            self.trace.items.append(TracedEvent(record=EVENT_ROWS.decode(row)))
 
     def _decided(self, t_ns: int, fault_code: str, result: CorrelationResult) -> None:
         code = self.code
@@ -270,7 +275,7 @@ class Tracer:
         if rule is None and result.cluster_id and correlation is not None:
             cluster_rule = correlation.cluster_rule_of(fault_code)
             rule = rule_facts(cluster_rule) if cluster_rule is not None else None
-        self.trace.items.append(
+        self.trace.add(
             CorrelationDecision(
                 t_ns=t_ns,
                 fault_code=fault_code,

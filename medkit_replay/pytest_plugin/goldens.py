@@ -12,7 +12,12 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from medkit_replay.pytest_plugin.session import keeping_modules, note_updated, update_requested
+from medkit_replay.pytest_plugin.session import (
+    golden_size_limit,
+    keeping_modules,
+    note_updated,
+    update_requested,
+)
 
 if TYPE_CHECKING:
     from medkit_replay.pytest_plugin.replays import PathLike
@@ -80,7 +85,7 @@ def assert_matches_golden(
         from medkit_replay.outputs.json_report import to_report  # noqa: PLC0415
 
         diff = diff_reports(
-            read_report(golden_path),
+            read_report(golden_path, golden_size_limit()),
             to_report(result),
             time_tolerance_ns=tolerance_ns(time_tolerance),
             baseline_name=str(golden_path),

@@ -52,7 +52,7 @@ def _restore_modules() -> None:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """Add ``--update-golden`` and ``--allow-empty-replay``."""
+    """Add ``--update-golden``, ``--allow-empty-replay`` and ``--golden-max-report-mb``."""
     group = parser.getgroup("medkit-replay", "medkit-replay regression tests")
     group.addoption(
         "--update-golden",
@@ -69,12 +69,24 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         help="medkit-replay: let assert_within_budget pass a replay in which nothing reached "
         "the fault manager (it fails by default).",
     )
+    group.addoption(
+        "--golden-max-report-mb",
+        type=int,
+        default=None,
+        dest="medkit_replay_max_report_mb",
+        metavar="MB",
+        help="medkit-replay: largest golden report read, plain or decompressed, in MiB "
+        "(default 1024, or MEDKIT_REPLAY_MAX_REPORT_MB).",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """Remember the session's config (for the update flag of the module-level helpers), and
     hand it the replay's modules if an earlier session in this process imported them."""
     _restore_modules()
+    mb = config.getoption("medkit_replay_max_report_mb", None)
+    if mb is not None and mb < 1:
+        raise pytest.UsageError("--golden-max-report-mb must be 1 or more")
     config.stash[_updated_key] = []
     _configs.append(config)
 
@@ -106,6 +118,14 @@ def empty_allowed() -> bool:
     if not _configs:
         return False
     return bool(_configs[-1].getoption("medkit_replay_allow_empty"))
+
+
+def golden_size_limit() -> int | None:
+    """``--golden-max-report-mb`` in bytes, or None when not given (the default limit)."""
+    if not _configs:
+        return None
+    mb = _configs[-1].getoption("medkit_replay_max_report_mb")
+    return None if mb is None else int(mb) * 1024 * 1024
 
 
 def note_updated(path: Path) -> None:

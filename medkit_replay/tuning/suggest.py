@@ -25,6 +25,12 @@ DEFAULT_MIN_CONFIDENCE = 0.8
 cascade: the root confirmed shortly before; for a burst: the codes confirmed together)."""
 WINDOW_STEP_MS = 100
 """A rule's window is the longest delay seen, with a quarter more, rounded up to this."""
+DEFAULT_MAX_PAIRS = 20_000
+"""Pairs of codes compared, at most (``--max-pairs``): every pair is weighed in every run, and
+its delays kept, so time and memory grow with the square of the codes. 20,000 pairs are 200
+codes (some seconds and tens of MB over tens of runs); past it, the codes confirmed in the most
+runs are kept (ties in byte order) and the pairs left out are counted."""
+"""A rule's window is the longest delay seen, with a quarter more, rounded up to this."""
 
 Confirmations = Sequence[tuple[int, str]]
 
@@ -87,6 +93,21 @@ class Burst:
 
 
 @dataclass(frozen=True, slots=True)
+class Paired:
+    """Which codes were compared in pairs: those confirmed in at least min_support runs (no
+    other can make a pattern), or the ``kept`` of them confirmed in most runs when they make
+    more than max_pairs pairs (``dropped`` pairs were then never weighed)."""
+
+    candidates: int
+    kept: int
+    max_pairs: int
+
+    @property
+    def dropped(self) -> int:
+        return pairs_of(self.candidates) - pairs_of(self.kept)
+
+
+@dataclass(frozen=True, slots=True)
 class Suggestion:
     """What the fleet suggests, and what it was learned from."""
 
@@ -96,6 +117,27 @@ class Suggestion:
     min_confidence: float
     cascades: tuple[Cascade, ...]
     bursts: tuple[Burst, ...]
+    paired: Paired
+
+
+def pairs_of(codes: int) -> int:
+    """Unordered pairs of ``codes`` codes."""
+    return codes * (codes - 1) // 2
+
+
+def _paired_codes(
+    present: dict[str, int], min_support: int, max_pairs: int
+) -> tuple[list[str], Paired]:
+    """The codes to compare in pairs, in byte order (see :class:`Paired`)."""
+    candidates = sorted(
+        (c for c, runs in present.items() if runs >= min_support),
+        key=lambda c: (-present[c], c.encode("utf-8")),
+    )
+    kept = len(candidates)
+    while pairs_of(kept) > max_pairs:
+        kept -= 1
+    codes = sorted(candidates[:kept], key=lambda c: c.encode("utf-8"))
+    return codes, Paired(len(candidates), kept, max_pairs)
 
 
 def rule_window(delay_ms: int) -> int:
@@ -148,6 +190,7 @@ def suggest(
     window_ms: int = DEFAULT_WINDOW_MS,
     min_support: int = DEFAULT_MIN_SUPPORT,
     min_confidence: float = DEFAULT_MIN_CONFIDENCE,
+    max_pairs: int = DEFAULT_MAX_PAIRS,
 ) -> Suggestion:
     """Propose cascades and bursts from runs' confirmations (each in the order they happened).
 
@@ -158,6 +201,7 @@ def suggest(
     runs either confirmed in. Codes joined by either relation form a group: when one of them
     leads every other, the group is a cascade (root and symptoms), else a burst; symptoms that
     confirm together because their root drags them are thus never a burst of their own.
+    At most ``max_pairs`` pairs of codes are weighed (see :class:`Paired`).
     """
     window_ns = window_ms * NS_PER_MS
     parsed = [_Run(run) for run in runs]
@@ -165,7 +209,7 @@ def suggest(
     for run in parsed:
         for code in run.times:
             present[code] = present.get(code, 0) + 1
-    codes = sorted(present, key=lambda c: c.encode("utf-8"))
+    codes, paired = _paired_codes(present, min_support, max_pairs)
     after: dict[tuple[str, str], list[int]] = {}
     together: dict[tuple[str, str], list[int]] = {}
     for run in parsed:
@@ -226,7 +270,7 @@ def suggest(
     cascades.sort(key=lambda c: (-max(x.support for x in c.symptoms), c.root.encode()))
     bursts.sort(key=lambda b: (-b.support, b.codes[0].encode()))
     return Suggestion(
-        len(runs), window_ms, min_support, min_confidence, tuple(cascades), tuple(bursts)
+        len(runs), window_ms, min_support, min_confidence, tuple(cascades), tuple(bursts), paired
     )
 
 

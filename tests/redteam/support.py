@@ -75,8 +75,10 @@ def run_limited(
     timeout: float = 120.0,
     cwd: Path | None = None,
     env: Mapping[str, str] | None = None,
+    module: str = "medkit_replay.cli",
 ) -> Outcome:
-    """Run ``medkit-replay ARGV...`` in a child process under the given limits."""
+    """Run ``medkit-replay ARGV...`` (or ``python -m MODULE ARGV...``) in a child process
+    under the given limits."""
     child_env = dict(os.environ)
     child_env.update(env or {})
     child_env.setdefault("COLUMNS", "100")
@@ -91,7 +93,7 @@ def run_limited(
                 str(peak_file),
                 *limits,
                 "-m",
-                "medkit_replay.cli",
+                module,
                 *map(str, argv),
             ],
             stdout=out,
