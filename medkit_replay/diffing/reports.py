@@ -137,9 +137,13 @@ _ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
 _PIECE = 1024 * 1024
 # Compressed bytes fed to zstd at a time: one feed expands to at most 8 MiB (RLE blocks).
 _ZSTD_FEED = 256
-# No ratio limit: real reports compress 66x (gzip) to 140x (zstd; 200,000 reports of one
-# flapping code), but a report of long repeated texts compresses past any ratio worth fixing,
-# and the counting read above already makes a bomb cost no memory; ``limit`` bounds the time.
+MAX_EXPANSION = 1000
+"""How many times its compressed size a report may expand to once past EXPANSION_FLOOR bytes.
+Real reports compress 66x (gzip) to 140x (zstd, 200,000 reports of one flapping code); a bomb
+thousands of times. The counting read already makes a bomb cost no memory: this makes it cost
+no time either. A report past it can still be read once decompressed by hand (``zstd -d``)."""
+EXPANSION_FLOOR = 64 * 1024 * 1024
+"""Below this many bytes of text no ratio is checked (a small report of repeated texts)."""
 
 
 def _pieces(stream: IO[bytes], compression: str) -> Iterator[bytes]:
@@ -176,6 +180,8 @@ def _expand(
         failures = (*failures, zstandard.ZstdError)
     total = 0
     started = False
+    packed = os.fstat(stream.fileno()).st_size
+    ceiling = min(limit, max(EXPANSION_FLOOR, MAX_EXPANSION * packed))
     try:
         for piece in _pieces(stream, compression):
             if not started and (text := piece.lstrip(_BLANK)):
@@ -187,9 +193,13 @@ def _expand(
                     )
                 started = True
             total += len(piece)
-            if total > limit:
+            if total > ceiling:
                 raise InputError(
-                    f"a {compression} report that expands past {report_limit_text(limit)}",
+                    f"a {compression} report that expands past {report_limit_text(limit)}"
+                    if total > limit
+                    else f"a {compression} report of {packed:,} bytes that expands more than "
+                    f"{MAX_EXPANSION:,} times its size (no real report does: a decompression "
+                    "bomb)",
                     path=str(path),
                 )
             if keep is not None:

@@ -16,7 +16,7 @@ import pytest
 import zstandard
 
 from medkit_replay.cli import main
-from medkit_replay.diffing.reports import report_bytes
+from medkit_replay.diffing.reports import EXPANSION_FLOOR, MAX_EXPANSION, report_bytes
 from medkit_replay.files import MIB
 from tests.redteam.support import Outcome, assert_one_line_error, run_limited
 
@@ -98,8 +98,33 @@ def test_a_bomb_is_refused_at_the_default_limit_with_little_memory(
     bomb = bomb_file(tmp_path, compression)
     assert bomb.stat().st_size < 4 * MIB
     outcome = diff(plain, bomb)
-    assert_small_refusal(outcome, bomb, f"{compression} report that expands past 1,024 MiB")
-    assert LIMIT_HINT in outcome.stderr
+    if compression == "gzip":  # deflate expands at most ~1,000x: the size limit comes first
+        assert_small_refusal(outcome, bomb, "gzip report that expands past 1,024 MiB")
+        assert LIMIT_HINT in outcome.stderr
+    else:
+        assert_small_refusal(outcome, bomb, f"expands more than {MAX_EXPANSION:,} times its size")
+
+
+def test_a_bomb_past_the_ratio_is_refused_whatever_the_size_limit(
+    tmp_path: Path, plain: Path
+) -> None:
+    bomb = bomb_file(tmp_path, "zstd", 3 * 512 * MIB)  # 1.5 GiB from ~50 KB
+    packed = bomb.stat().st_size
+    outcome = diff(plain, bomb, "--max-report-mb", "4096")
+    assert_small_refusal(
+        outcome,
+        bomb,
+        f"a zstd report of {packed:,} bytes that expands more than {MAX_EXPANSION:,} times",
+    )
+
+
+def test_a_small_report_of_repeated_text_is_under_the_ratio_floor(tmp_path: Path) -> None:
+    text = b'{"warnings": ["' + b"x" * (8 * MIB) + b'"]}'
+    path = tmp_path / "repeated.json.zst"
+    path.write_bytes(zstandard.ZstdCompressor(level=19).compress(text))
+    assert len(text) > MAX_EXPANSION * path.stat().st_size  # past the ratio, under the floor
+    assert len(text) < EXPANSION_FLOOR
+    assert report_bytes(path, 64 * MIB) == text
 
 
 @pytest.mark.parametrize("compression", ["zstd", "gzip"])
