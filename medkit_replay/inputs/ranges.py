@@ -11,6 +11,8 @@ import os
 from contextlib import suppress
 from typing import TYPE_CHECKING, BinaryIO, Protocol
 
+from medkit_replay.files import open_regular
+
 if TYPE_CHECKING:
     from pathlib import Path
     from types import TracebackType
@@ -85,7 +87,7 @@ class LocalSource:
         return LocalRanges(self.path)
 
     def stream(self) -> BinaryIO:
-        return self.path.open("rb")
+        return open_regular(self.path)  # type: ignore[return-value]  # a BufferedReader
 
 
 class LocalRanges:
@@ -94,7 +96,7 @@ class LocalRanges:
     always_ahead = False
 
     def __init__(self, path: Path) -> None:
-        self._file = path.open("rb", buffering=0)
+        self._file = open_regular(path)  # a FIFO or device is refused, never waited on
         self._fd = self._file.fileno()
         try:
             self.size = os.fstat(self._fd).st_size
