@@ -21,8 +21,18 @@ import pytest
 
 import medkit_replay
 from medkit_replay.files import FileRefusedError
+from medkit_replay.inputs.follow import Follow
 from medkit_replay.inputs.watch import FollowRestart, Watched
-from tests.inputs.builders import diag, set_metadata, storage_file, write_bag, write_bare
+from medkit_replay.model import POLL_MIN_S
+from medkit_replay.pipeline import replay
+from tests.inputs.builders import (
+    as_wal,
+    diag,
+    set_metadata,
+    storage_file,
+    write_bag,
+    write_bare,
+)
 from tests.redteam.support import assert_one_line_error, run_limited
 
 SECOND = 1_000_000_000
@@ -135,6 +145,33 @@ def test_a_fifo_is_never_watched(tmp_path: Path) -> None:
     os.mkfifo(fifo)
     with pytest.raises(FileRefusedError, match="a FIFO, not a regular file"):
         Watched(fifo)
+
+
+class ReplacedAtFirstWait(Follow):
+    """A Follow whose first wait renames ``new`` over ``path`` (then waits as usual)."""
+
+    def __init__(self, path: Path, new: Path) -> None:
+        super().__init__(poll_s=POLL_MIN_S, idle_timeout_s=3)
+        self.path, self.new = path, new
+
+    def wait(self) -> None:
+        if self.new.exists():
+            self.new.replace(self.path)
+        super().wait()
+
+
+def test_a_db3_renamed_over_while_followed_restarts_the_replay(tmp_path: Path) -> None:
+    # A WAL-mode database with its -wal beside it is read while written; renamed over, it is
+    # never read at the old row ids: the replay ends with FollowRestart (follow starts again).
+    run = write_bare(tmp_path / "run.db3", [diag(k * SECOND) for k in (1, 2, 3)])
+    new = write_bare(tmp_path / "new.db3", [diag(k * SECOND, name="lidar") for k in (1, 2)])
+    for db in (run, new):
+        as_wal(db)
+    (tmp_path / "run.db3-wal").touch()
+    follow = ReplacedAtFirstWait(run, new)
+    with pytest.raises(FollowRestart, match=r"run.db3 was replaced by another file"):
+        replay([run], follow=follow)
+    assert not new.exists()  # replaced after the first look, as the test means
 
 
 # --- follow, against files changed under it ------------------------------------------------
