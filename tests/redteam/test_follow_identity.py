@@ -28,8 +28,6 @@ from medkit_replay.pipeline import replay
 from tests.inputs.builders import (
     as_wal,
     diag,
-    set_metadata,
-    storage_file,
     write_bag,
     write_bare,
 )
@@ -39,39 +37,6 @@ SECOND = 1_000_000_000
 PACKAGE_ROOT = Path(medkit_replay.__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(PACKAGE_ROOT)}
 TIMEOUT = 60
-
-
-def bag_with_storage_fifo(tmp_path: Path, storage: str, *, alone: bool) -> tuple[Path, Path]:
-    """A bag whose metadata.yaml lists a FIFO as a storage file (beside its real one, or alone)."""
-    bag = write_bag(tmp_path / "bag", [diag(k * SECOND) for k in (1, 2, 3)], storage=storage)  # type: ignore[arg-type]
-    real = storage_file(bag)
-    fifo = bag / f"pipe{real.suffix}"
-    os.mkfifo(fifo)
-    names = [fifo.name] if alone else [fifo.name, real.name]
-    if alone:
-        real.unlink()
-    set_metadata(bag, relative_file_paths=names, files=[{"path": n} for n in names])
-    return bag, fifo
-
-
-@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
-def test_a_fifo_among_the_storage_files_is_skipped_as_a_missing_one(
-    tmp_path: Path, storage: str
-) -> None:
-    bag, fifo = bag_with_storage_fifo(tmp_path, storage, alone=False)
-    report = tmp_path / "report.json"
-    outcome = run_limited(["analyze", bag, "--json", report, "--quiet"], timeout=TIMEOUT)
-    assert outcome.status == 0, outcome.stderr
-    data = json.loads(report.read_text())
-    assert f"{fifo}: cannot read: a FIFO, not a regular file; skipped" in data["warnings"]
-    assert data["summary"]["messages_read"] == 3
-
-
-@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
-def test_a_bag_of_one_fifo_is_refused_in_one_line(tmp_path: Path, storage: str) -> None:
-    bag, _ = bag_with_storage_fifo(tmp_path, storage, alone=True)
-    outcome = run_limited(["analyze", bag, "--quiet"], timeout=TIMEOUT)
-    assert_one_line_error(outcome, str(bag), "a FIFO, not a regular file")
 
 
 @pytest.mark.parametrize("command", ["analyze", "follow"])
