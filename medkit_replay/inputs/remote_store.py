@@ -7,6 +7,7 @@ without user, password or query, and say the problem in our own words.
 
 from __future__ import annotations
 
+import asyncio
 import os
 import re
 import threading
@@ -15,11 +16,18 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import urlsplit
 
 from medkit_replay.errors import InputError
+from medkit_replay.inputs.remote_fetch import (
+    SPEED_LIMIT_ENV,
+    SPEED_TIME_ENV,
+    Stalled,
+    Stopped,
+    fetch_ranges,
+    low_speed,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
 
-    from obstore import Bytes
     from obstore.store import ClientConfig, GCSConfig, RetryConfig, S3CredentialProvider
 
 SCHEMES = ("s3", "gs", "http", "https")
@@ -28,6 +36,9 @@ ATTEMPTS = 5
 """Tries of one range request: a dropped connection or a short body is asked for again."""
 BACKOFF_S = 0.1
 """Wait before the second try; doubled before each further one."""
+STALLED_TRIES = 2
+"""Tries of one range request that may stall (see inputs.remote_fetch) before it is given up:
+a server that stalls is left after about twice the low-speed time (a minute by default)."""
 _STATUS = re.compile(r"status code: (\d{3})|\b(\d{3}) (?:Forbidden|Not Found|Unauthorized)")
 
 
@@ -235,6 +246,7 @@ class RemoteObject:
         self.store = store
         self.location = location
         self.tally = tally
+        self.deadline = low_speed()
         self.size = self._head()
         tally.sizes[location.key] = self.size
 
@@ -263,30 +275,40 @@ class RemoteObject:
 
     def fetch_many(
         self, starts: list[int], ends: list[int], stop: threading.Event | None = None
-    ) -> list[Bytes]:
+    ) -> list[bytes]:
         """The bytes of each range ``[starts[i], ends[i])`` (within the object, not
-        overlapping), in one call that sends the requests concurrently; the ranges that fail
-        or come back cut short are asked for again, as :meth:`fetch` does.
+        overlapping), in one try that sends the requests concurrently; the ranges that fail
+        or come back cut short are asked for again, as :meth:`fetch` does. A try that stalls
+        (under the low-speed deadline) is ended and counts as one; STALLED_TRIES of them end
+        the fetch.
 
         Raises:
             RemoteError: as :meth:`fetch`, for any of the ranges.
         """
         obstore = _obstore()
-        got: list[Bytes | None] = [None] * len(starts)
+        got: list[bytes | None] = [None] * len(starts)
         todo = list(range(len(starts)))
         problem = ""
+        stalls = 0
         pause = stop if stop is not None else threading.Event()  # waits between tries
         for attempt in range(ATTEMPTS):
             if attempt and pause.wait(BACKOFF_S * 2 ** (attempt - 1)):
                 raise self._fail("reading stopped")
+            ranges = [(starts[k], ends[k]) for k in todo]  # coalesced by the caller as it wanted
             try:
-                parts = obstore.get_ranges(
-                    self.store,
-                    self.location.key,
-                    starts=[starts[k] for k in todo],
-                    ends=[ends[k] for k in todo],
-                    coalesce=0,  # the caller coalesced them as it wanted
-                )
+                key, deadline = self.location.key, self.deadline
+                parts = asyncio.run(fetch_ranges(obstore, self.store, key, ranges, deadline, pause))
+            except Stalled:
+                stalls += 1
+                problem = f"stalled: {self.deadline}"
+                if stalls == STALLED_TRIES:
+                    raise self._fail(
+                        f"{problem}; gave up after {stalls} stalled tries (raise the limits "
+                        f"with {SPEED_TIME_ENV} or {SPEED_LIMIT_ENV})"
+                    ) from None
+                continue
+            except Stopped:
+                raise self._fail("reading stopped") from None
             except Exception as exc:
                 final, problem = _problem(exc)
                 if final:

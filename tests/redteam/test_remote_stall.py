@@ -1,0 +1,94 @@
+"""Red team: a server that trickles, against the low-speed deadline of remote reads.
+
+A server sending one byte a second held ``analyze`` for minutes before "gave up after 5 tries";
+now each try under the speed limit for its time is ended (its connection closed) and two such
+tries end the read in one line naming the stall and the URL. Small deadlines, set through the
+environment variables, keep each case to seconds.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import pytest
+
+from medkit_replay.errors import InputError
+from medkit_replay.inputs.remote_fetch import SPEED_LIMIT_ENV, SPEED_TIME_ENV
+from medkit_replay.inputs.remote_store import RemoteObject, Tally, open_store, parse_location
+from tests.inputs.builders import diag, write_bare
+from tests.redteam.support import assert_one_line_error, run_limited
+from tests.remote_support import range_server
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+pytest.importorskip("obstore")
+
+SECOND = 1_000_000_000
+DATA = bytes(range(256)) * 8
+
+
+def remote_object(base: str, name: str) -> RemoteObject:
+    location = parse_location(f"{base}/{name}")
+    return RemoteObject(open_store(location), location, Tally(location.display))
+
+
+def test_analyze_against_a_server_sending_a_byte_a_second_ends_in_one_line(
+    tmp_path: Path,
+) -> None:
+    write_bare(tmp_path / "run.mcap", [diag(k * SECOND) for k in (1, 2, 3)])
+    with range_server(tmp_path) as (base, served):
+        served.trickle_s = 1.0
+        started = time.monotonic()
+        outcome = run_limited(
+            ["analyze", f"{base}/run.mcap", "--quiet"], env={SPEED_TIME_ENV: "2"}, timeout=60
+        )
+        elapsed = time.monotonic() - started
+        waited = time.monotonic() + 10  # the server sees a hang-up at its next byte
+        while served.hung_up < 2 and time.monotonic() < waited:
+            time.sleep(0.1)
+        hung_up = served.hung_up
+    assert_one_line_error(
+        outcome,
+        f"{base}/run.mcap: stalled: under 1 KB/s for 2 s; gave up after 2 stalled tries "
+        f"(raise the limits with {SPEED_TIME_ENV} or {SPEED_LIMIT_ENV})",
+    )
+    assert hung_up >= 2  # each stalled try closed its connection: the server stopped sending
+    print(f"\nstalled read given up after {elapsed:.1f} s (2 tries of 2 s)")
+
+
+def test_a_read_above_the_speed_limit_is_never_stalled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # About 200 bytes a second for 2 s: over a limit of 50 B/s it is read whole, over one of
+    # 1 KB/s it stalls. The same server, the same bytes: only the deadline differs.
+    (tmp_path / "run.mcap").write_bytes(DATA)
+    monkeypatch.setenv(SPEED_TIME_ENV, "1")
+    with range_server(tmp_path) as (base, served):
+        served.trickle_s = 0.005
+        monkeypatch.setenv(SPEED_LIMIT_ENV, "50")
+        assert remote_object(base, "run.mcap").fetch(100, 500) == DATA[100:500]
+        monkeypatch.setenv(SPEED_LIMIT_ENV, "1024")
+        with pytest.raises(InputError, match=r"stalled: under 1 KB/s for 1 s; gave up after 2"):
+            remote_object(base, "run.mcap").fetch(100, 500)
+        monkeypatch.setenv(SPEED_LIMIT_ENV, "0")  # no deadline
+        assert remote_object(base, "run.mcap").fetch(0, 300) == DATA[:300]
+
+
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [
+        (SPEED_TIME_ENV, "abc"),
+        (SPEED_TIME_ENV, "0"),
+        (SPEED_LIMIT_ENV, "-1"),
+        (SPEED_LIMIT_ENV, "nan"),
+    ],
+)
+def test_a_deadline_that_is_not_a_number_in_range_is_one_line(
+    tmp_path: Path, name: str, value: str
+) -> None:
+    write_bare(tmp_path / "run.mcap", [diag(SECOND)])
+    with range_server(tmp_path) as (base, _served):
+        outcome = run_limited(["analyze", f"{base}/run.mcap", "--quiet"], env={name: value})
+    assert_one_line_error(outcome, f"{name}={value!r}: must be")
