@@ -6,16 +6,17 @@ per second, over the last LOW_SPEED_SECONDS, is abandoned (its connections close
 
 from __future__ import annotations
 
-import asyncio
 import math
 import os
-from contextlib import suppress
+import queue
+import threading
+import time
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from medkit_replay.errors import InputError
 
 if TYPE_CHECKING:
-    import threading
+    from collections.abc import Callable
 
 LOW_SPEED_BYTES = 1024
 """A try is too slow under this many bytes per second (over LOW_SPEED_SECONDS)."""
@@ -37,6 +38,10 @@ class LowSpeed(NamedTuple):
 
     def __str__(self) -> str:
         return f"under {_rate(self.bytes_per_s)} for {self.seconds:g} s"
+
+    def slower(self) -> str:
+        """The limit alone, as said of reads that each ended before the time."""
+        return f"reads under {_rate(self.bytes_per_s)}"
 
 
 class Stalled(Exception):  # noqa: N818  # a condition met, not an error of ours
@@ -79,7 +84,7 @@ def _number(name: str, default: float, expected: str, low: float | None = None) 
     return value
 
 
-async def fetch_ranges(
+def fetch_ranges(
     obstore: Any,
     store: object,
     key: str,
@@ -87,40 +92,27 @@ async def fetch_ranges(
     deadline: LowSpeed,
     stop: threading.Event,
 ) -> list[bytes]:
-    """The bytes of each ``[start, end)`` of object ``key``, requested concurrently, each
-    read as it arrives so that the speed of the whole try is known.
+    """The bytes of each ``[start, end)`` of object ``key``: one try, its requests sent
+    concurrently (up to CONCURRENT_RANGES), each body read as it arrives so that the speed
+    of the whole try is known.
 
     Raises:
-        Stalled: the try stayed under the speed limit for its time (its requests cancelled).
+        Stalled: the try stayed under the speed limit for its time; its requests are
+            abandoned (each closes its connection at its next bytes, or at obstore's request
+            timeout if none come).
         Stopped: ``stop`` was set meanwhile.
         Exception: what obstore raised for a request.
     """
-    received = 0
-    gate = asyncio.Semaphore(CONCURRENT_RANGES)
-
-    async def one(start: int, end: int) -> bytes:
-        nonlocal received
-        async with gate:
-            result = await obstore.get_async(store, key, options={"range": (start, end)})
-            pieces = []
-            async for piece in result.stream(min_chunk_size=1):  # each piece as it comes
-                pieces.append(piece)
-                received += len(piece)
-        return b"".join(pieces)
-
-    work = asyncio.gather(*(one(start, end) for start, end in ranges))
-    loop = asyncio.get_running_loop()
-    samples = [(loop.time(), 0)]  # (time, bytes received by then) over the last window
+    attempt = _Try(obstore, store, key, ranges)
+    for _ in range(min(CONCURRENT_RANGES, len(ranges))):
+        _WORKERS.submit(attempt.work)
+    samples = [(time.monotonic(), 0)]  # (time, bytes received by then) over the last window
     tick = min(1.0, deadline.seconds / 4)
     try:
-        while True:
-            done, _ = await asyncio.wait({work}, timeout=tick)
-            if done:
-                parts: list[bytes] = work.result()
-                return parts
+        while not attempt.over.wait(tick):
             if stop.is_set():
                 raise Stopped
-            now = loop.time()
+            now, received = time.monotonic(), sum(attempt.received)
             samples.append((now, received))
             while len(samples) > 1 and samples[1][0] <= now - deadline.seconds:
                 del samples[0]
@@ -129,7 +121,87 @@ async def fetch_ranges(
             if now - since >= deadline.seconds and slow:
                 raise Stalled
     finally:
-        if not work.done():
-            work.cancel()  # closes the connections: the server stops sending
-            with suppress(asyncio.CancelledError, Exception):
-                await work
+        attempt.abandon.set()
+    if attempt.error is not None:
+        raise attempt.error
+    return [part if part is not None else b"" for part in attempt.parts]
+
+
+class _Workers:
+    """Daemon threads that read ranges, kept between tries (starting a thread costs about
+    what a request on a fast link does); one is started whenever a job would otherwise wait,
+    and none is joined at exit (one abandoned on a silent server must not hold the process)."""
+
+    def __init__(self) -> None:
+        self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._idle = 0
+        self._waiting = 0
+
+    def submit(self, job: Callable[[], None]) -> None:
+        with self._lock:
+            self._waiting += 1
+            if self._waiting > self._idle:
+                self._idle += 1  # counted from now, so that the next job sees it
+                threading.Thread(target=self._run, name="medkit-replay-range", daemon=True).start()
+        self._jobs.put(job)
+
+    def _run(self) -> None:
+        while True:
+            job = self._jobs.get()
+            with self._lock:
+                self._idle -= 1
+                self._waiting -= 1
+            job()
+            with self._lock:
+                self._idle += 1
+
+
+_WORKERS = _Workers()
+
+
+class _Try:
+    """The requests of one try, taken in turn by its threads; what each received so far."""
+
+    def __init__(self, obstore: Any, store: object, key: str, ranges: list[tuple[int, int]]):
+        self._obstore, self._store, self._key, self._ranges = obstore, store, key, ranges
+        self.parts: list[bytes | None] = [None] * len(ranges)
+        self.received = [0] * len(ranges)  # each slot written by the one thread reading it
+        self.error: Exception | None = None
+        self.over = threading.Event()  # every range read, or one failed
+        self.abandon = threading.Event()
+        self._next = iter(range(len(ranges)))
+        self._left = len(ranges)
+        self._lock = threading.Lock()
+
+    def work(self) -> None:
+        while not self.abandon.is_set():
+            with self._lock:
+                k = next(self._next, None)
+            if k is None:
+                return
+            try:
+                part = self._read(k)
+            except Exception as exc:  # said by the caller, in its words
+                with self._lock:
+                    self.error = self.error or exc
+                self.over.set()
+                return
+            if part is None:
+                return  # abandoned
+            self.parts[k] = part
+            with self._lock:
+                self._left -= 1
+                if not self._left:
+                    self.over.set()
+
+    def _read(self, k: int) -> bytes | None:
+        start, end = self._ranges[k]
+        result = self._obstore.get(self._store, self._key, options={"range": (start, end)})
+        pieces = []
+        for piece in result.stream(min_chunk_size=1):  # each piece as it comes
+            if self.abandon.is_set():
+                return None  # the stream goes, and its connection with it
+            pieces.append(piece)
+            self.received[k] += len(piece)
+        return b"".join(pieces)

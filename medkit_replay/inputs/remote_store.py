@@ -7,10 +7,10 @@ without user, password or query, and say the problem in our own words.
 
 from __future__ import annotations
 
-import asyncio
 import os
 import re
 import threading
+import time
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import urlsplit
@@ -36,9 +36,12 @@ ATTEMPTS = 5
 """Tries of one range request: a dropped connection or a short body is asked for again."""
 BACKOFF_S = 0.1
 """Wait before the second try; doubled before each further one."""
-STALLED_TRIES = 2
-"""Tries of one range request that may stall (see inputs.remote_fetch) before it is given up:
-a server that stalls is left after about twice the low-speed time (a minute by default)."""
+SLOW_BUDGET = 2
+"""An object is given up once its reads have spent this many times the low-speed time (see
+inputs.remote_fetch) under the speed limit, in all: two stalled tries, or many slow ones (a
+server trickling small reads that each end before the time). A minute or so by default."""
+SLOW_GRACE_S = 1.0
+"""A try that ends sooner is never counted as slow (a small read over a long round trip)."""
 _STATUS = re.compile(r"status code: (\d{3})|\b(\d{3}) (?:Forbidden|Not Found|Unauthorized)")
 
 
@@ -247,6 +250,9 @@ class RemoteObject:
         self.location = location
         self.tally = tally
         self.deadline = low_speed()
+        self._slow_s = 0.0  # time its tries spent under the speed limit, in all
+        self._slow_problem = ""
+        self._slow_lock = threading.Lock()
         self.size = self._head()
         tally.sizes[location.key] = self.size
 
@@ -279,8 +285,8 @@ class RemoteObject:
         """The bytes of each range ``[starts[i], ends[i])`` (within the object, not
         overlapping), in one try that sends the requests concurrently; the ranges that fail
         or come back cut short are asked for again, as :meth:`fetch` does. A try that stalls
-        (under the low-speed deadline) is ended and counts as one; STALLED_TRIES of them end
-        the fetch.
+        (under the low-speed deadline) is ended and tried again, until the object's reads
+        have spent SLOW_BUDGET low-speed times under the speed limit.
 
         Raises:
             RemoteError: as :meth:`fetch`, for any of the ranges.
@@ -289,23 +295,19 @@ class RemoteObject:
         got: list[bytes | None] = [None] * len(starts)
         todo = list(range(len(starts)))
         problem = ""
-        stalls = 0
         pause = stop if stop is not None else threading.Event()  # waits between tries
         for attempt in range(ATTEMPTS):
             if attempt and pause.wait(BACKOFF_S * 2 ** (attempt - 1)):
                 raise self._fail("reading stopped")
+            self._check_speed()
             ranges = [(starts[k], ends[k]) for k in todo]  # coalesced by the caller as it wanted
+            began = time.monotonic()
             try:
                 key, deadline = self.location.key, self.deadline
-                parts = asyncio.run(fetch_ranges(obstore, self.store, key, ranges, deadline, pause))
+                parts = fetch_ranges(obstore, self.store, key, ranges, deadline, pause)
             except Stalled:
-                stalls += 1
                 problem = f"stalled: {self.deadline}"
-                if stalls == STALLED_TRIES:
-                    raise self._fail(
-                        f"{problem}; gave up after {stalls} stalled tries (raise the limits "
-                        f"with {SPEED_TIME_ENV} or {SPEED_LIMIT_ENV})"
-                    ) from None
+                self._slow(time.monotonic() - began, problem)
                 continue
             except Stopped:
                 raise self._fail("reading stopped") from None
@@ -314,7 +316,10 @@ class RemoteObject:
                 if final:
                     raise self._fail(problem) from None
                 continue
-            self.tally.add(sum(map(len, parts)))
+            took, fetched = time.monotonic() - began, sum(map(len, parts))
+            self.tally.add(fetched)
+            if took > SLOW_GRACE_S and fetched < self.deadline.bytes_per_s * took:
+                self._slow(took, f"too slow: {self.deadline.slower()}")
             short = []
             for k, part in zip(todo, parts, strict=True):
                 if len(part) == ends[k] - starts[k]:
@@ -326,6 +331,26 @@ class RemoteObject:
                 return [part for part in got if part is not None]
             todo = short
         raise self._fail(f"{problem}; gave up after {ATTEMPTS} tries")
+
+    def _slow(self, seconds: float, problem: str) -> None:
+        """Count a try's time under the speed limit (``problem`` says how it was slow)."""
+        with self._slow_lock:
+            self._slow_s += seconds
+            self._slow_problem = problem
+
+    def _check_speed(self) -> None:
+        """Before a try: give up once the object's reads spent their slow budget.
+
+        Raises:
+            RemoteError: they have spent SLOW_BUDGET low-speed times under the speed limit.
+        """
+        with self._slow_lock:
+            spent, problem = self._slow_s, self._slow_problem
+        if spent >= SLOW_BUDGET * self.deadline.seconds:
+            raise self._fail(
+                f"{problem}; gave up after {spent:.0f} s under that speed (raise the limits "
+                f"with {SPEED_TIME_ENV} or {SPEED_LIMIT_ENV})"
+            )
 
 
 def list_objects(store: object, location: Location) -> Iterator[tuple[str, int]]:
