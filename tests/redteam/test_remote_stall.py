@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import time
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import pytest
@@ -22,12 +23,23 @@ from tests.redteam.support import assert_one_line_error, run_limited
 from tests.remote_support import range_server
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
     from pathlib import Path
 
 pytest.importorskip("obstore")
 
 SECOND = 1_000_000_000
 DATA = bytes(range(256)) * 8
+
+
+@contextmanager
+def trickling(root: Path, per_byte_s: float) -> Iterator[str]:
+    """The Range server, its GETs sending a byte every ``per_byte_s``, serving DATA as run.mcap;
+    yields its base URL."""
+    (root / "run.mcap").write_bytes(DATA)
+    with range_server(root) as (base, served):
+        served.trickle_s = per_byte_s
+        yield base
 
 
 def remote_object(base: str, name: str) -> RemoteObject:
@@ -67,10 +79,8 @@ def test_a_read_above_the_speed_limit_is_never_stalled(
 ) -> None:
     # About 200 bytes a second for 2 s: over a limit of 50 B/s it is read whole, over one of
     # 1 KB/s it stalls. The same server, the same bytes: only the deadline differs.
-    (tmp_path / "run.mcap").write_bytes(DATA)
     monkeypatch.setenv(SPEED_TIME_ENV, "1")
-    with range_server(tmp_path) as (base, served):
-        served.trickle_s = 0.005
+    with trickling(tmp_path, 0.005) as base:
         monkeypatch.setenv(SPEED_LIMIT_ENV, "50")
         assert remote_object(base, "run.mcap").fetch(100, 500) == DATA[100:500]
         monkeypatch.setenv(SPEED_LIMIT_ENV, "1024")
@@ -85,10 +95,8 @@ def test_small_reads_each_slow_but_short_are_given_up_in_all(
 ) -> None:
     # 30 bytes at about 20 a second: each read ends before the 3 s of the deadline, yet the
     # object is given up once its reads spent 2 x 3 s under the limit (not read after read).
-    (tmp_path / "run.mcap").write_bytes(DATA)
     monkeypatch.setenv(SPEED_TIME_ENV, "3")
-    with range_server(tmp_path) as (base, served):
-        served.trickle_s = 0.05
+    with trickling(tmp_path, 0.05) as base:
         obj = remote_object(base, "run.mcap")
         started = time.monotonic()
         read = 0
