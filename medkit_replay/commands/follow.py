@@ -8,6 +8,7 @@ from __future__ import annotations
 import signal
 import sys
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -109,11 +110,20 @@ def _replay_following(
     live = None if stream is None else _printer(stream)
     while True:
         try:
-            return replay([recording], list(configs), follow=control, live=live)
+            result = replay([recording], list(configs), follow=control, live=live)
         except FollowRestart as restart:
             echo(f"medkit-replay: {restart.reason}; replaying it from its start\n", sys.stderr)
             control.restart(restart.reason)
             _wait_to_appear(recording, control)
+            continue
+        # Added here, not by the input: a report replayed once more as it stands (recorded
+        # ReportFault calls that came late) says it too.
+        said = tuple(
+            f"{reason} while it was followed; this report is a replay of what the path held "
+            "then, from its start"
+            for reason in control.restarts
+        )
+        return replace(result, warnings=(*said, *result.warnings)) if said else result
 
 
 def _wait_to_appear(recording: Path, control: Follow) -> None:

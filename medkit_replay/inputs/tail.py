@@ -69,11 +69,6 @@ class TailInput(Rosbag2Input):
         self._read: set[Path] = set()  # storage files taken so far
         if self._directory:
             follow.watch(path, folder=True)
-        for reason in follow.restarts:
-            ctx.warn(
-                f"{reason} while it was followed; this report is a replay of what the path held "
-                "then, from its start"
-            )
 
     def _finished(self) -> bool:
         return self._directory and (self.path / "metadata.yaml").exists()
