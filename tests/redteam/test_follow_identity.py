@@ -40,11 +40,24 @@ TIMEOUT = 60
 
 
 @pytest.mark.parametrize("command", ["analyze", "follow"])
-def test_a_fifo_named_mcap_is_refused_not_waited_for(tmp_path: Path, command: str) -> None:
-    fifo = tmp_path / "run.mcap"
+@pytest.mark.parametrize("suffix", [".mcap", ".db3"])
+def test_a_fifo_named_as_a_recording_is_refused_not_waited_for(
+    tmp_path: Path, command: str, suffix: str
+) -> None:
+    fifo = tmp_path / f"run{suffix}"
     os.mkfifo(fifo)
     outcome = run_limited([command, fifo, "--quiet"], timeout=TIMEOUT)
     assert_one_line_error(outcome, str(fifo), "a FIFO, not a regular file")
+
+
+@pytest.mark.parametrize("command", ["analyze", "follow"])
+def test_a_device_behind_a_recording_name_is_refused_not_read_forever(
+    tmp_path: Path, command: str
+) -> None:
+    link = tmp_path / "run.mcap"
+    link.symlink_to("/dev/zero")
+    outcome = run_limited([command, link, "--quiet"], timeout=TIMEOUT)
+    assert_one_line_error(outcome, str(link), "a character device, not a regular file")
 
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
