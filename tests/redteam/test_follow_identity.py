@@ -15,7 +15,7 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 import pytest
 
@@ -33,31 +33,34 @@ from tests.inputs.builders import (
 )
 from tests.redteam.support import assert_one_line_error, run_limited
 
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
 SECOND = 1_000_000_000
 PACKAGE_ROOT = Path(medkit_replay.__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(PACKAGE_ROOT)}
 TIMEOUT = 60
 
 
-@pytest.mark.parametrize("command", ["analyze", "follow"])
-@pytest.mark.parametrize("suffix", [".mcap", ".db3"])
-def test_a_fifo_named_as_a_recording_is_refused_not_waited_for(
-    tmp_path: Path, command: str, suffix: str
-) -> None:
-    fifo = tmp_path / f"run{suffix}"
-    os.mkfifo(fifo)
-    outcome = run_limited([command, fifo, "--quiet"], timeout=TIMEOUT)
-    assert_one_line_error(outcome, str(fifo), "a FIFO, not a regular file")
+def device(path: Path) -> None:
+    """/dev/zero under a recording's name: a device that would be read forever."""
+    path.symlink_to("/dev/zero")
 
 
 @pytest.mark.parametrize("command", ["analyze", "follow"])
-def test_a_device_behind_a_recording_name_is_refused_not_read_forever(
-    tmp_path: Path, command: str
+@pytest.mark.parametrize(
+    ("name", "make", "kind"),
+    [("run.mcap", os.mkfifo, "a FIFO"), ("run.db3", os.mkfifo, "a FIFO"),
+     ("run.mcap", device, "a character device")],
+    ids=["fifo-mcap", "fifo-db3", "dev-zero"],
+)  # fmt: skip
+def test_a_recording_that_is_not_a_regular_file_is_refused_not_read(
+    tmp_path: Path, command: str, name: str, make: Callable[[Path], None], kind: str
 ) -> None:
-    link = tmp_path / "run.mcap"
-    link.symlink_to("/dev/zero")
-    outcome = run_limited([command, link, "--quiet"], timeout=TIMEOUT)
-    assert_one_line_error(outcome, str(link), "a character device, not a regular file")
+    path = tmp_path / name
+    make(path)
+    outcome = run_limited([command, path, "--quiet"], timeout=TIMEOUT)
+    assert_one_line_error(outcome, str(path), f"{kind}, not a regular file")
 
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
