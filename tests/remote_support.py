@@ -52,6 +52,8 @@ class Served:
     forbidden: set[str] = field(default_factory=set)
     drop_next: int = 0  # this many next GETs send half their body and close the connection
     delay_s: float = 0.0  # wait before each GET's body (a slow link)
+    trickle_s: float = 0.0  # wait before each byte of a GET's body (a server that trickles)
+    hung_up: int = 0  # trickled bodies the client stopped reading (it closed the connection)
     seen: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # method, headers
     ranges: list[tuple[str, int, int]] = field(default_factory=list)  # GETs: path, start, end
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -137,6 +139,9 @@ class _Handler(BaseHTTPRequestHandler):
             drop = self.served.drop_next > 0 and length > 1
             if drop:
                 self.served.drop_next -= 1
+        if self.served.trickle_s:
+            self._trickle(data)
+            return
         if drop:  # half the body, then the connection goes away
             self.wfile.write(data[: length // 2])
             self.wfile.flush()
@@ -146,6 +151,20 @@ class _Handler(BaseHTTPRequestHandler):
         self.wfile.write(data)
         with self.served.lock:
             self.served.body_bytes += len(data)
+
+    def _trickle(self, data: bytes) -> None:
+        """The body one byte at a time, ``trickle_s`` apart, until the client hangs up."""
+        try:
+            for k in range(len(data)):
+                self.wfile.write(data[k : k + 1])
+                self.wfile.flush()
+                with self.served.lock:
+                    self.served.body_bytes += 1
+                time.sleep(self.served.trickle_s)
+        except ConnectionError:
+            with self.served.lock:
+                self.served.hung_up += 1
+            self.close_connection = True
 
 
 @contextmanager

@@ -8,6 +8,7 @@ from __future__ import annotations
 import signal
 import sys
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -25,6 +26,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.model import FaultEvent, Transition
+    from medkit_replay.result import Result
 
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 
@@ -76,7 +78,6 @@ def follow(
     """
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.inputs.follow import Follow  # noqa: PLC0415
-    from medkit_replay.pipeline import replay  # noqa: PLC0415
 
     targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
     chosen, writers = prepare_reports([recording], configs, json_out, targets)
@@ -86,12 +87,7 @@ def follow(
         _wait_to_appear(recording, control)
         echo(f"following {recording} (every {control.poll_s:g} s; Ctrl-C writes the report)\n",
              sys.stderr)  # fmt: skip
-        result = replay(
-            [recording],
-            list(configs),
-            follow=control,
-            live=None if quiet else _printer(stream),
-        )
+        result = _replay_following(recording, configs, control, None if quiet else stream)
     ending = (
         "the recording is finished"
         if control.finished
@@ -101,6 +97,33 @@ def follow(
     for note in control.notes:
         echo(f"medkit-replay: note: {note}\n", sys.stderr)
     write_reports(result, json_out, chosen, writers, quiet=quiet)
+
+
+def _replay_following(
+    recording: Path, configs: tuple[Path, ...], control: Follow, stream: TextIO | None
+) -> Result:
+    """Replay the recording as it is written; when a file read was replaced or cut, say so
+    and replay again from its start (the report is then the new file's, with a warning)."""
+    from medkit_replay.inputs.watch import FollowRestart  # noqa: PLC0415
+    from medkit_replay.pipeline import replay  # noqa: PLC0415
+
+    live = None if stream is None else _printer(stream)
+    while True:
+        try:
+            result = replay([recording], list(configs), follow=control, live=live)
+        except FollowRestart as restart:
+            echo(f"medkit-replay: {restart.reason}; replaying it from its start\n", sys.stderr)
+            control.restart(restart.reason)
+            _wait_to_appear(recording, control)
+            continue
+        # Added here, not by the input: a report replayed once more as it stands (recorded
+        # ReportFault calls that came late) says it too.
+        said = tuple(
+            f"{reason} while it was followed; this report is a replay of what the path held "
+            "then, from its start"
+            for reason in control.restarts
+        )
+        return replace(result, warnings=(*said, *result.warnings)) if said else result
 
 
 def _wait_to_appear(recording: Path, control: Follow) -> None:

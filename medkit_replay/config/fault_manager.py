@@ -85,9 +85,14 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
         # Upstream turns the seconds into an int64-nanosecond duration: inf or a value past
         # ~292 years is undefined there. Nothing that old exists in a recording (whose times
         # are int64 nanoseconds), so the closest behaviour that is defined is: never fires.
+        # Said where it was written: a value that looks like "wait a long time" but turns the
+        # feature off is easy to miss in a layered config.
+        written = params.get("auto_confirm_after_sec")
         reader.warn(
             f"auto_confirm_after_sec {auto_sec} is beyond int64 nanoseconds (292 years): "
-            "time-based confirmation can never fire; using 0.0 (off)"
+            "time-based confirmation can never fire (upstream accepts it and never "
+            "auto-confirms); using 0.0 (off)",
+            f"{written.path}:{written.line}" if written is not None else "",
         )
         auto_sec = 0.0
     near_miss = reader.integer("near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)

@@ -61,9 +61,10 @@ class ParameterReader:
         self.params = params
         self.warnings: list[str] = []
 
-    def warn(self, text: str) -> None:
-        """Record a warning the live node would log at start-up."""
-        self.warnings.append(f"{self.node}: {text}")
+    def warn(self, text: str, where: str = "") -> None:
+        """Record a warning the live node would log at start-up (``where``: the file and line
+        of the value it is about, when known)."""
+        self.warnings.append(f"{where}: {self.node}: {text}" if where else f"{self.node}: {text}")
 
     def _wrong(self, name: str, expected: str, value: object, hint: str = "") -> ConfigError:
         problem = (

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.storage import Connection
+    from medkit_replay.inputs.watch import Watched
 
 _ORDER = itemgetter(0, 1)
 _HEADER_BYTES = 100  # an SQLite database header
@@ -44,7 +45,8 @@ class Db3Tail(Db3File):
     written without locking it, so it is read once the recording moved on (``done``). Each
     poll's rows form one batch, sorted by (log time, id), released once later rows show that
     nothing earlier follows. Counts and the span come from the final database, as for a
-    finished file.
+    finished file. Every poll checks, before and after reading, that it is still the file
+    first seen (``watched``).
     """
 
     def __init__(
@@ -55,9 +57,11 @@ class Db3Tail(Db3File):
         *,
         follow: Follow,
         done: Callable[[], bool],
+        watched: Watched,
     ) -> None:
         self._follow = follow
         self._done = done
+        self._watched = watched
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
         self._too_large = False  # for a copy in the temporary folder
@@ -70,6 +74,7 @@ class Db3Tail(Db3File):
             moved_on = self._done()
             try:
                 with open_regular(path) as bio:
+                    self._watched.check_open(bio.fileno())
                     magic = bio.read(_HEADER_BYTES)
             except OSError as exc:
                 raise NotABagError(f"cannot read: {exc.strerror or exc}") from None
@@ -97,6 +102,7 @@ class Db3Tail(Db3File):
         try:
             while True:
                 done = self._done()
+                self._watched.look()
                 fresh = self._snapshot(mirror, done)
                 if fresh is not None:
                     source = fresh
@@ -105,6 +111,7 @@ class Db3Tail(Db3File):
                     ) as db:
                         self._new_topics(db, wants, wanted, classified)
                         batch, last_id = self._new_rows(db, wanted, last_id, losses)
+                    self._watched.look()  # what was copied or read is of the file read so far
                     if batch:
                         batch.sort(key=_ORDER)
                         yield Bound(min(batch[0].t_ns, cap))
@@ -129,7 +136,7 @@ class Db3Tail(Db3File):
                 self._waited = self._stat()
             return None
         if not done:
-            if self.path.stat().st_size > temp_room():
+            if self._watched.size > temp_room():
                 if not self._too_large:
                     self._too_large = True
                     self._follow.notes.append(

@@ -10,10 +10,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from medkit_replay.inputs.watch import Watched
 from medkit_replay.model import POLL_DEFAULT_S, POLL_MAX_S, POLL_MIN_S
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from pathlib import Path
 
 COSTLY_SHARE = 0.1
 """Most of the time a costly step of following may take (copying a database again)."""
@@ -42,6 +44,10 @@ class Follow:
         finished: set by the input when the recording was finished (not stopped).
         stopped: why following ended early, if it did.
         notes: what the user should know about the run, beyond the report.
+        restarts: why the replay started again (a followed file replaced or cut), in order;
+            each is a warning of the report.
+        watched: the files (and folder) read so far, looked at on every poll
+            (:class:`~medkit_replay.inputs.watch.FollowRestart` when one is not what it was).
     """
 
     poll_s: float = POLL_DEFAULT_S
@@ -50,12 +56,31 @@ class Follow:
     finished: bool = False
     stopped: str | None = None
     notes: list[str] = field(default_factory=list)
+    restarts: list[str] = field(default_factory=list)
+    watched: list[Watched] = field(default_factory=list)
     _last_data: float = field(default_factory=time.monotonic)
     _since: dict[object, float] = field(default_factory=dict)
     _spent: dict[object, tuple[float, float]] = field(default_factory=dict)  # start, duration
 
     def __post_init__(self) -> None:
         self.poll_s = min(max(self.poll_s, POLL_MIN_S), POLL_MAX_S)
+
+    def watch(self, path: Path, *, folder: bool = False) -> Watched:
+        """Start watching a file (or the bag folder) now read: see :class:`Watched`."""
+        watched = Watched(path, folder=folder)
+        self.watched.append(watched)
+        return watched
+
+    def restart(self, reason: str) -> None:
+        """Start over: the recording is to be replayed again from its start (``reason`` is
+        kept in :attr:`restarts`); what was learnt of the old files goes."""
+        self.restarts.append(reason)
+        self.finished, self.stopped = False, None
+        self.notes.clear()
+        self.watched.clear()
+        self._since.clear()
+        self._spent.clear()
+        self.saw_data()
 
     def request_stop(self, reason: str) -> None:
         """Ask the following to end at its next look (safe from a signal handler)."""
@@ -100,10 +125,11 @@ class Follow:
             raise FollowStopped(self.stop_reason)
 
     def wait(self) -> None:
-        """Sleep one poll interval before the next look.
+        """Sleep one poll interval before the next look, then look at every file read so far.
 
         Raises:
             FollowStopped: a stop was asked for, or nothing new arrived for the idle timeout.
+            FollowRestart: a file read so far was replaced or cut.
         """
         self.check()
         if (
@@ -113,3 +139,5 @@ class Follow:
             raise FollowStopped(f"nothing new for {self.idle_timeout_s:g} s")
         time.sleep(self.poll_s)
         self.check()
+        for watched in self.watched:
+            watched.look()

@@ -25,7 +25,9 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.merge import Bound, Timed
+    from medkit_replay.inputs.ranges import RangeReader
     from medkit_replay.inputs.storage import Connection, Raw
+    from medkit_replay.inputs.watch import Watched
 
 
 class McapTail(McapFile):
@@ -34,7 +36,8 @@ class McapTail(McapFile):
     The file is scanned from its start (a summary, if present, is not used: the scan stops at
     the Data End record). It is finished when that record is reached or, once ``done`` says the
     recording moved on (a later split file, metadata.yaml), at the end of its bytes; a record
-    cut off then follows the damage rules of a finished file.
+    cut off then follows the damage rules of a finished file. Every look at its size and
+    every opening checks it is still the file first seen (``watched``).
     """
 
     def __init__(
@@ -45,21 +48,22 @@ class McapTail(McapFile):
         *,
         follow: Follow,
         done: Callable[[], bool],
+        watched: Watched,
     ) -> None:
         self._follow = follow
         self._done = done
+        self._watched = watched
         self._unfinished = False  # the writer moved on before the file's Data End record
-        super().__init__(path, file_no, warn)
+        super().__init__(path, file_no, warn, source=LocalSource(path, watched.check_open))
 
-    def _probe(self, bio: object) -> None:
+    def _probe(self, reader: RangeReader) -> None:
         """Wait for the magic and the header record; nothing else is known before reading."""
         head_size = len(MAGIC) + 9
         while True:
             moved_on = self._done()
-            self._size = self.path.stat().st_size
+            self._size = self._watched.look()
             if self._size >= head_size:
-                with self.path.open("rb") as stream:
-                    head = stream.read(head_size)
+                head = reader.read(0, head_size)
                 if head[: len(MAGIC)] != MAGIC:
                     raise NotABagError("not an MCAP file (bad magic)")
                 if head[len(MAGIC)] != OP_HEADER:
@@ -69,9 +73,7 @@ class McapTail(McapFile):
                     raise NotABagError("MCAP header record is damaged")
                 self._data_start = head_size + length
                 if self._data_start <= self._size:
-                    with self.path.open("rb") as stream:
-                        stream.seek(head_size)
-                        body = stream.read(self._data_start - head_size)
+                    body = reader.read(head_size, self._data_start - head_size)
                     break
             if moved_on:
                 raise NotABagError("MCAP file cut off before its header record ends")
@@ -98,7 +100,8 @@ class McapTail(McapFile):
         without them would say)."""
         while True:
             moved_on = self._done()
-            with LocalSource(self.path).ranges() as reader:
+            self._watched.look()
+            with self._source.ranges() as reader:
                 size = reader.size
                 tail_at = max(self._data_start, size - len(MAGIC))
                 if reader.read(tail_at, size - tail_at) == MAGIC or moved_on:
@@ -117,7 +120,7 @@ class McapTail(McapFile):
     def _grow(self, need: int) -> bool:
         while True:
             moved_on = self._done()  # before the size: bytes written before it are seen
-            size = self.path.stat().st_size
+            size = self._watched.look()
             if size > self._size:
                 self._size = self._data_end = size
                 self._follow.saw_data()

@@ -11,7 +11,10 @@ import os
 from contextlib import suppress
 from typing import TYPE_CHECKING, BinaryIO, Protocol
 
+from medkit_replay.files import open_regular
+
 if TYPE_CHECKING:
+    from collections.abc import Callable
     from pathlib import Path
     from types import TracebackType
     from typing import Self
@@ -76,16 +79,28 @@ class ByteSource(Protocol):
 
 
 class LocalSource:
-    """A local file: positioned reads, and the kernel's page cache for read-ahead."""
+    """A local file: positioned reads, and the kernel's page cache for read-ahead.
 
-    def __init__(self, path: Path) -> None:
+    ``check`` is given each descriptor opened (a followed file checks it is still the one
+    read so far); what it raises propagates, the descriptor closed.
+    """
+
+    def __init__(self, path: Path, check: Callable[[int], None] | None = None) -> None:
         self.path = path
+        self._check = check
 
     def ranges(self) -> LocalRanges:
-        return LocalRanges(self.path)
+        return LocalRanges(self.path, self._check)
 
     def stream(self) -> BinaryIO:
-        return self.path.open("rb")
+        stream = open_regular(self.path)
+        try:
+            if self._check is not None:
+                self._check(stream.fileno())
+        except BaseException:
+            stream.close()
+            raise
+        return stream  # type: ignore[return-value]  # a BufferedReader
 
 
 class LocalRanges:
@@ -93,10 +108,12 @@ class LocalRanges:
 
     always_ahead = False
 
-    def __init__(self, path: Path) -> None:
-        self._file = path.open("rb", buffering=0)
+    def __init__(self, path: Path, check: Callable[[int], None] | None = None) -> None:
+        self._file = open_regular(path)  # a FIFO or device is refused, never waited on
         self._fd = self._file.fileno()
         try:
+            if check is not None:
+                check(self._fd)
             self.size = os.fstat(self._fd).st_size
         except BaseException:
             self._file.close()

@@ -42,8 +42,6 @@ if TYPE_CHECKING:
     from types import TracebackType
     from typing import BinaryIO, Self
 
-    from obstore import Bytes
-
     from medkit_replay.inputs.remote_store import Location
     from medkit_replay.inputs.source import InputContext
     from medkit_replay.inputs.storage import StorageFile
@@ -69,7 +67,7 @@ class _Block(NamedTuple):
     """One asked-for range: where it ends, the batch fetching it, its place in the batch."""
 
     end: int
-    batch: Future[list[Bytes]]
+    batch: Future[list[bytes]]
     slot: int
 
 
@@ -92,7 +90,7 @@ class RemoteRanges:
         self._pending: list[tuple[int, int]] = []
         self._blocks: dict[int, _Block] = {}  # by start, oldest first
         self._starts: list[int] = []  # sorted
-        self._users: dict[Future[list[Bytes]], int] = {}  # blocks held of each batch
+        self._users: dict[Future[list[bytes]], int] = {}  # blocks held of each batch
         self._held = 0
 
     def _covering(self, start: int, end: int) -> tuple[int, _Block] | None:

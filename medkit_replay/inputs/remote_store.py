@@ -10,16 +10,24 @@ from __future__ import annotations
 import os
 import re
 import threading
+import time
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import urlsplit
 
 from medkit_replay.errors import InputError
+from medkit_replay.inputs.remote_fetch import (
+    SPEED_LIMIT_ENV,
+    SPEED_TIME_ENV,
+    Stalled,
+    Stopped,
+    fetch_ranges,
+    low_speed,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
 
-    from obstore import Bytes
     from obstore.store import ClientConfig, GCSConfig, RetryConfig, S3CredentialProvider
 
 SCHEMES = ("s3", "gs", "http", "https")
@@ -28,6 +36,12 @@ ATTEMPTS = 5
 """Tries of one range request: a dropped connection or a short body is asked for again."""
 BACKOFF_S = 0.1
 """Wait before the second try; doubled before each further one."""
+SLOW_BUDGET = 2
+"""An object is given up once its reads have spent this many times the low-speed time (see
+inputs.remote_fetch) under the speed limit, in all: two stalled tries, or many slow ones (a
+server trickling small reads that each end before the time). A minute or so by default."""
+SLOW_GRACE_S = 1.0
+"""A try that ends sooner is never counted as slow (a small read over a long round trip)."""
 _STATUS = re.compile(r"status code: (\d{3})|\b(\d{3}) (?:Forbidden|Not Found|Unauthorized)")
 
 
@@ -235,6 +249,10 @@ class RemoteObject:
         self.store = store
         self.location = location
         self.tally = tally
+        self.deadline = low_speed()
+        self._slow_s = 0.0  # time its tries spent under the speed limit, in all
+        self._slow_problem = ""
+        self._slow_lock = threading.Lock()
         self.size = self._head()
         tally.sizes[location.key] = self.size
 
@@ -263,36 +281,45 @@ class RemoteObject:
 
     def fetch_many(
         self, starts: list[int], ends: list[int], stop: threading.Event | None = None
-    ) -> list[Bytes]:
+    ) -> list[bytes]:
         """The bytes of each range ``[starts[i], ends[i])`` (within the object, not
-        overlapping), in one call that sends the requests concurrently; the ranges that fail
-        or come back cut short are asked for again, as :meth:`fetch` does.
+        overlapping), in one try that sends the requests concurrently; the ranges that fail
+        or come back cut short are asked for again, as :meth:`fetch` does. A try that stalls
+        (under the low-speed deadline) is ended and tried again, until the object's reads
+        have spent SLOW_BUDGET low-speed times under the speed limit.
 
         Raises:
             RemoteError: as :meth:`fetch`, for any of the ranges.
         """
         obstore = _obstore()
-        got: list[Bytes | None] = [None] * len(starts)
+        got: list[bytes | None] = [None] * len(starts)
         todo = list(range(len(starts)))
         problem = ""
         pause = stop if stop is not None else threading.Event()  # waits between tries
         for attempt in range(ATTEMPTS):
             if attempt and pause.wait(BACKOFF_S * 2 ** (attempt - 1)):
                 raise self._fail("reading stopped")
+            self._check_speed()
+            ranges = [(starts[k], ends[k]) for k in todo]  # coalesced by the caller as it wanted
+            began = time.monotonic()
             try:
-                parts = obstore.get_ranges(
-                    self.store,
-                    self.location.key,
-                    starts=[starts[k] for k in todo],
-                    ends=[ends[k] for k in todo],
-                    coalesce=0,  # the caller coalesced them as it wanted
-                )
+                key, deadline = self.location.key, self.deadline
+                parts = fetch_ranges(obstore, self.store, key, ranges, deadline, pause)
+            except Stalled:
+                problem = f"stalled: {self.deadline}"
+                self._slow(time.monotonic() - began, problem)
+                continue
+            except Stopped:
+                raise self._fail("reading stopped") from None
             except Exception as exc:
                 final, problem = _problem(exc)
                 if final:
                     raise self._fail(problem) from None
                 continue
-            self.tally.add(sum(map(len, parts)))
+            took, fetched = time.monotonic() - began, sum(map(len, parts))
+            self.tally.add(fetched)
+            if took > SLOW_GRACE_S and fetched < self.deadline.bytes_per_s * took:
+                self._slow(took, f"too slow: {self.deadline.slower()}")
             short = []
             for k, part in zip(todo, parts, strict=True):
                 if len(part) == ends[k] - starts[k]:
@@ -304,6 +331,26 @@ class RemoteObject:
                 return [part for part in got if part is not None]
             todo = short
         raise self._fail(f"{problem}; gave up after {ATTEMPTS} tries")
+
+    def _slow(self, seconds: float, problem: str) -> None:
+        """Count a try's time under the speed limit (``problem`` says how it was slow)."""
+        with self._slow_lock:
+            self._slow_s += seconds
+            self._slow_problem = problem
+
+    def _check_speed(self) -> None:
+        """Before a try: give up once the object's reads spent their slow budget.
+
+        Raises:
+            RemoteError: they have spent SLOW_BUDGET low-speed times under the speed limit.
+        """
+        with self._slow_lock:
+            spent, problem = self._slow_s, self._slow_problem
+        if spent >= SLOW_BUDGET * self.deadline.seconds:
+            raise self._fail(
+                f"{problem}; gave up after {spent:.0f} s under that speed (raise the limits "
+                f"with {SPEED_TIME_ENV} or {SPEED_LIMIT_ENV})"
+            )
 
 
 def list_objects(store: object, location: Location) -> Iterator[tuple[str, int]]:

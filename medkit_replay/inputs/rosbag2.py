@@ -69,8 +69,9 @@ def _one_line(exc: BaseException | str) -> str:
     return " ".join(str(exc).split())
 
 
-def _load_metadata(path: Path) -> object:
-    """The document in metadata.yaml: a regular file, bounded in size and in YAML nodes.
+def _load_metadata(path: Path) -> tuple[object, yaml.Node | None]:
+    """The document in metadata.yaml and its YAML nodes (for lines): a regular file, bounded in
+    size and in YAML nodes.
 
     Raises:
         OSError, UnicodeDecodeError, yaml.YAMLError, YamlBoundsError, ValueError.
@@ -82,13 +83,64 @@ def _load_metadata(path: Path) -> object:
         return _bounded_load(text, yaml.SafeLoader)  # says what is wrong as it does
 
 
-def _bounded_load(text: str, loader_class: type[yaml.SafeLoader]) -> object:
+def _bounded_load(
+    text: str, loader_class: type[yaml.SafeLoader]
+) -> tuple[object, yaml.Node | None]:
     loader = loader_class(text)
     try:
         root = compose_bounded(loader.get_single_node)
-        return None if root is None else loader.construct_document(root)
+        return (None if root is None else loader.construct_document(root)), root
     finally:
         loader.dispose()
+
+
+def _entry_lines(root: yaml.Node | None, key: str, count: int) -> list[int | None]:
+    """The line of each of the ``count`` entries of ``rosbag2_bagfile_information.<key>``
+    (None each when the nodes do not match the document, as after a merge key)."""
+    node = _child(_child(root, "rosbag2_bagfile_information"), key)
+    if isinstance(node, yaml.SequenceNode) and len(node.value) == count:
+        return [item.start_mark.line + 1 for item in node.value]
+    return [None] * count
+
+
+def _child(node: yaml.Node | None, key: str) -> yaml.Node | None:
+    """The value node of ``key`` in a mapping node (the last one, as the document keeps)."""
+    found = None
+    if isinstance(node, yaml.MappingNode):
+        for name, value in node.value:
+            if isinstance(name, yaml.ScalarNode) and name.value == key:
+                found = value
+    return found
+
+
+def _brief(value: object) -> str:
+    """A listed value shown in a warning, short whatever it holds."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        return "a number past int64"
+    if value is None or isinstance(value, bool | int | float):
+        return repr(value)
+    if isinstance(value, str):
+        return repr(value[:60])
+    if isinstance(value, dict) and "nanoseconds_since_epoch" in value:
+        return f"{{nanoseconds_since_epoch: {_brief(value['nanoseconds_since_epoch'])}}}"
+    return "a list" if isinstance(value, list) else "a mapping"
+
+
+def _unusable(
+    path: Path,
+    key: str,
+    lines: list[int | None],
+    bad: list[tuple[int, str]],
+    what: str,
+    outcome: str = "ignored",
+) -> str:
+    """One warning for the unusable entries ``bad`` (index, shown) of a list in metadata.yaml,
+    at the first one's line."""
+    first = lines[bad[0][0]]
+    where = f"{path}:{first}" if first is not None else str(path)
+    shown = ", ".join(text for _, text in bad[:3]) + (", ..." if len(bad) > 3 else "")
+    count = f"{len(bad)} entr{'y' if len(bad) == 1 else 'ies'}"
+    return f"{where}: {key}: {count} {what} ({shown}); {outcome}"
 
 
 def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | None:
@@ -97,7 +149,7 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
     if not path.exists():
         return None
     try:
-        document = _load_metadata(path)
+        document, root = _load_metadata(path)
     except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError) as exc:
         # ValueError: an integer of thousands of digits, refused by Python's int().
         warn(f"{path}: cannot be read ({_one_line(exc)})")
@@ -116,19 +168,44 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
     storage = info.get("storage_identifier")
     meta = _Metadata(storage=storage if isinstance(storage, str) and storage else None)
     names: dict[str, list[str]] = {}
-    for name in _listed(path, info, "relative_file_paths", warn):
+    listed = _listed(path, info, "relative_file_paths", warn)
+    not_names = [(k, _brief(n)) for k, n in enumerate(listed) if not isinstance(n, str)]
+    for name in listed:
         if isinstance(name, str):
             _add_file(meta, names, name)
+    if not_names:
+        lines = _entry_lines(root, "relative_file_paths", len(listed))
+        warn(_unusable(path, "relative_file_paths", lines, not_names, "not naming a file"))
     entries: dict[str, list[str]] = {}
-    for entry in _listed(path, info, "files", warn):
+    listed = _listed(path, info, "files", warn)
+    no_path: list[tuple[int, str]] = []
+    bad_start: list[tuple[int, str]] = []
+    for k, entry in enumerate(listed):
         name = entry.get("path") if isinstance(entry, dict) else None
         if not isinstance(entry, dict) or not isinstance(name, str):
+            no_path.append((k, _brief(name if isinstance(entry, dict) else entry)))
             continue
         base = _add_file(meta, entries, name)
-        start = entry.get("starting_time")
-        start = start.get("nanoseconds_since_epoch") if isinstance(start, dict) else None
+        written = entry.get("starting_time")
+        start = written.get("nanoseconds_since_epoch") if isinstance(written, dict) else None
         if base and isinstance(start, int) and 0 <= start < 2**63:
             meta.starts.setdefault(base, start)
+        elif written is not None:
+            bad_start.append((k, f"{_brief(name)}: {_brief(written)}"))
+    lines = _entry_lines(root, "files", len(listed)) if no_path or bad_start else []
+    if no_path:
+        warn(_unusable(path, "files", lines, no_path, "without a file path"))
+    if bad_start:
+        warn(
+            _unusable(
+                path,
+                "files",
+                lines,
+                bad_start,
+                "with a starting_time that is not {nanoseconds_since_epoch: N} in int64",
+                "ignored (the file's own first message time is used)",
+            )
+        )
     for key, found in (("relative_file_paths", names), ("files", entries)):
         for base, spelled in found.items():
             if len(spelled) > 1:

@@ -8,10 +8,11 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
+from medkit_replay.files import FileRefusedError
 from medkit_replay.inputs.db3_tail import Db3Tail
 from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.mcap_tail import McapTail
-from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _storage_files
+from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _natural_key
 from medkit_replay.inputs.storage import NotABagError
 from medkit_replay.inputs.wal import is_wal_mode
 
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.merge import Bound, Timed
     from medkit_replay.inputs.source import InputContext
     from medkit_replay.inputs.storage import Raw, StorageFile
+    from medkit_replay.inputs.watch import Watched
 
 FOLLOWED_SUFFIXES = (".mcap", ".db3")
 """Storage files that can be followed (a file-compressed ``.zstd`` one is written whole)."""
@@ -33,6 +35,7 @@ def open_tail(path: Path, ctx: InputContext, follow: Follow) -> TailInput:
 
     Raises:
         InputError: the path is of a kind that cannot be followed.
+        OSError: the path is not a regular file (a FIFO, a device) or cannot be looked up.
     """
     if not path.is_dir() and path.suffix.lower() not in FOLLOWED_SUFFIXES:
         raise InputError(
@@ -51,31 +54,48 @@ class TailInput(Rosbag2Input):
     file or metadata.yaml present for SETTLE_S). A bare ``.mcap`` is finished at its Data End
     record, a bare ``.db3`` once no ``-wal`` is beside it. Until then every look at the files
     is one poll of the :class:`Follow`.
+
+    The folder and every file read are watched (:class:`~medkit_replay.inputs.watch.Watched`):
+    one replaced or cut ends the replay with a ``FollowRestart``, to start again. A new split
+    file is read after the ones read so far; a storage file that is not a regular file (a FIFO,
+    a device) is refused.
     """
 
     def __init__(self, path: Path, ctx: InputContext, follow: Follow) -> None:
+        self._directory = path.is_dir()
+        self._bare = None if self._directory else follow.watch(path)  # refuses a FIFO at once
         super().__init__(path, ctx, [], _Metadata())
         self._follow = follow
-        self._directory = path.is_dir()
+        self._read: set[Path] = set()  # storage files taken so far
+        if self._directory:
+            follow.watch(path, folder=True)
 
     def _finished(self) -> bool:
         return self._directory and (self.path / "metadata.yaml").exists()
 
     def _listing(self) -> list[Path]:
-        return [p for p in _storage_files(self.path) if p.suffix.lower() in FOLLOWED_SUFFIXES]
+        """The followed storage files in name order; any kind of file but a folder, so that one
+        that is not a regular file is refused rather than passed over."""
+        found = (
+            p
+            for p in self.path.iterdir()
+            if p.suffix.lower() in FOLLOWED_SUFFIXES and not p.is_dir()
+        )
+        return sorted(found, key=_natural_key)
 
     def _moved_on(self, index: int, path: Path) -> Callable[[], bool]:
-        """Whether the writer is done with the file at ``index`` of the listing.
+        """Whether the writer is done with ``path``, the ``index``-th file taken.
 
-        In a directory: once metadata.yaml or a later file exists and, as rosbag2 writes them
-        just before closing the file, a database has closed (its WAL gone) or that has lasted
-        SETTLE_S. A bare ``.db3`` once its WAL is gone; a bare MCAP only by its Data End record.
+        In a directory: once metadata.yaml or a file not taken yet exists and, as rosbag2
+        writes them just before closing the file, a database has closed (its WAL gone) or that
+        has lasted SETTLE_S. A bare ``.db3`` once its WAL is gone; a bare MCAP only by its Data
+        End record.
         """
         wal = path.with_name(path.name + "-wal")
         closed = path.suffix.lower() == ".db3"  # a closed WAL-mode database has no -wal
 
         def done() -> bool:
-            later = self._finished() or len(self._listing()) > index + 1
+            later = self._finished() or any(p not in self._read for p in self._listing())
             if closed and later and not wal.exists() and is_wal_mode(path):
                 return True
             return self._follow.lasting((self.path, index), later)
@@ -87,15 +107,18 @@ class TailInput(Rosbag2Input):
         return lambda: False
 
     def _next_path(self, index: int) -> Path | None:
-        """The storage file at ``index`` once it exists; None when the recording has no more."""
+        """The first storage file in name order not taken yet, once there is one; None when the
+        recording has no more. (Taken files that go, as rosbag2 removes a split file it
+        compressed, shift nothing.)"""
         if not self._directory:
             return self.path if index == 0 else None
         while True:
             finished = self._finished()  # before listing: files written before it are seen
-            files = self._listing()
-            if index < len(files):
+            fresh = [p for p in self._listing() if p not in self._read]
+            if fresh:
                 self._follow.saw_data()
-                return files[index]
+                self._read.add(fresh[0])
+                return fresh[0]
             if finished:
                 return None
             self._follow.wait()
@@ -103,8 +126,29 @@ class TailInput(Rosbag2Input):
     def _open_tail(self, path: Path, index: int) -> StorageFile:
         kind = McapTail if path.suffix.lower() == ".mcap" else Db3Tail
         return kind(
-            path, index, self.ctx.warn, follow=self._follow, done=self._moved_on(index, path)
+            path,
+            index,
+            self.ctx.warn,
+            follow=self._follow,
+            done=self._moved_on(index, path),
+            watched=self._watch(path),
         )
+
+    def _watch(self, path: Path) -> Watched:
+        """Watch a storage file from now on.
+
+        Raises:
+            InputError: it is not a regular file (never opened, so nothing blocks on it).
+            NotABagError: it cannot be looked up (then skipped).
+        """
+        if self._bare is not None:
+            return self._bare
+        try:
+            return self._follow.watch(path)
+        except FileRefusedError as exc:
+            raise InputError(f"cannot be followed ({exc})", path=str(path)) from None
+        except OSError as exc:
+            raise NotABagError(f"cannot read: {exc.strerror or exc}") from None
 
     def _raw(self) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
         index = 0
