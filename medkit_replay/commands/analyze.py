@@ -112,6 +112,9 @@ def analyze(
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
 
+    Exit status: 0 done; 2 bad usage, an input that does not exist or cannot be read, an
+    invalid config, or an output over an input.
+
     \b
     Examples:
       medkit-replay analyze mission/ --config robot_params.yaml --json report.json

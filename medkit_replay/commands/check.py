@@ -67,8 +67,8 @@ def check(
     """Replay each INPUT and check it against a fault budget.
 
     Each INPUT is its own run (one mission per recording) unless --merge is given. Exit
-    status: 0 every rule holds on every run, 1 the budget is exceeded or a recording cannot be
-    read, 2 bad usage, budget or config, or an INPUT that does not exist.
+    status: 0 every rule holds on every run; 1 the budget is exceeded or a recording cannot be
+    read; 2 bad usage, budget or config, or an INPUT that does not exist.
 
     \b
     Examples:
