@@ -97,7 +97,7 @@ class Forked:
             if isinstance(raised, MedkitReplayError):
                 raise raised
             why = f"failed ({raised})"
-        elif status != 0:
+        elif status != 0 or done < len(self._jobs):
             why = _ending(status)
         else:
             return
