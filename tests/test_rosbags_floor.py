@@ -64,12 +64,16 @@ def test_the_floors_give_the_same_reports(tmp_path: Path) -> None:
     venv = tmp_path / "venv"
     run(sys.executable, "-m", "venv", str(venv))  # its own site-packages only
     python = venv / "bin" / "python"
+    # Nothing of this environment's Python settings; pip's (index, cache) stay.
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("PYTHON")}
+    clean["PYTHONNOUSERSITE"] = "1"
     pinned = floors(declared())
     install = subprocess.run(
         [str(python), "-m", "pip", "install", "-q", "--only-binary=:all:", *pinned],
         capture_output=True,
         text=True,
         check=False,
+        env=clean,
     )
     if install.returncode != 0:
         pytest.fail(
@@ -80,14 +84,12 @@ def test_the_floors_give_the_same_reports(tmp_path: Path) -> None:
     versions = "import importlib.metadata as m, sys; print(m.version(sys.argv[1]))"
     for requirement in declared():
         if requirement.marker is None or requirement.marker.evaluate():
-            installed = run(python, "-c", versions, requirement.name).strip()
+            installed = run(python, "-c", versions, requirement.name, env=clean).strip()
             assert Version(installed) == Version(lower_bound(requirement)), requirement
-    # This source tree, and only it beside the venv's own packages.
-    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTHON")}
-    env |= {"PYTHONPATH": str(ROOT), "PYTHONNOUSERSITE": "1"}
+    source = clean | {"PYTHONPATH": str(ROOT)}  # this source tree beside the floors
     for sample in SAMPLES:
         command = ["-m", "medkit_replay.cli", "analyze", f"sample_bags/{sample}", *RULES, "--quiet"]
         oldest, here = tmp_path / f"{sample}.floor.json", tmp_path / f"{sample}.here.json"
-        run(python, *command, "--json", str(oldest), env=env)
+        run(python, *command, "--json", str(oldest), env=source)
         run(sys.executable, *command, "--json", str(here))
         assert oldest.read_bytes() == here.read_bytes(), sample
