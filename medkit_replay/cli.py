@@ -31,7 +31,12 @@ from medkit_replay.version import __version__
 @click.group()
 @click.version_option(__version__, prog_name="medkit-replay")
 def cli() -> None:
-    """Replay recorded ROS 2 traffic through ros2_medkit's fault manager logic."""
+    """Replay recorded ROS 2 traffic through ros2_medkit's fault manager logic.
+
+    Exit status: 0 pass; 1 a check failed; 2 usage or input error -- except that in check,
+    fleet --budget, sweep --budget and the pytest plugin a recording that cannot be read, or
+    is empty, is a failed check (1).
+    """
 
 
 def _terminate(signum: int, _frame: object) -> None:

@@ -114,6 +114,9 @@ def analyze(
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
 
+    Exit status: 0 done; 2 bad usage, an input that does not exist or cannot be read, an
+    invalid config, or an output over an input.
+
     \b
     Examples:
       medkit-replay analyze mission/ --config robot_params.yaml --json report.json
@@ -203,11 +206,11 @@ def write_reports(
     """Write the JSON report and every chosen output, then the human summary (unless quiet).
 
     ``ahead`` may hold batches of the report's long lists already encoded."""
-    from medkit_replay.outputs.forked import Forked  # noqa: PLC0415
+    from medkit_replay.outputs.forked import Forked, Job  # noqa: PLC0415
     from medkit_replay.outputs.report_file import write_report, write_report_stdout  # noqa: PLC0415
 
-    def others() -> None:
-        for (output, target), writer in zip(chosen, writers, strict=True):
+    def job(output: FileOutput, target: Path, writer: Callable[[Result, Path], object]) -> Job:
+        def write() -> None:
             try:
                 writer(result, target)
             except OSError as err:
@@ -215,10 +218,16 @@ def write_reports(
                     f"cannot write {output.label}: {err.strerror or err}", path=str(target)
                 ) from None
 
+        return output.label, write
+
+    pairs = zip(chosen, writers, strict=True)
+    jobs = [job(output, target, writer) for (output, target), writer in pairs]
     summary = sys.stderr if json_out == "-" else sys.stdout
     text = None
-    # With a JSON report to write as well, the other outputs are written meanwhile by a child.
-    with Forked(others) if json_out is not None and chosen else nullcontext():
+    # With a JSON report to write as well, the other outputs are written meanwhile by a child
+    # (one it leaves undone, killed, is written here after the report).
+    targets = [path for _, path in _output_paths(None, chosen)]
+    with Forked(jobs, targets) if json_out is not None and chosen else nullcontext():
         if not quiet:  # drawn now, while the children work; printed once all is written
             from medkit_replay.outputs.terminal import summary_text  # noqa: PLC0415
 
@@ -234,7 +243,8 @@ def write_reports(
                     f"cannot write report: {err.strerror or err}", path=json_out
                 ) from None
     if json_out is None or not chosen:
-        others()
+        for _, write in jobs:
+            write()
     if text is not None:
         if summary is sys.stderr:
             summary.write(text)

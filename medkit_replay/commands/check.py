@@ -70,8 +70,8 @@ def check(
 
     Each INPUT is its own run (one mission per recording) unless --merge is given. A run in
     which nothing reached the fault manager fails, whatever the rules (--allow-empty passes
-    it). Exit status: 0 every rule holds on every run, 1 the budget is exceeded or a recording
-    cannot be read or replayed nothing, 2 bad usage, budget or config, or an INPUT that does
+    it). Exit status: 0 every rule holds on every run; 1 the budget is exceeded or a recording
+    cannot be read or replayed nothing; 2 bad usage, budget or config, or an INPUT that does
     not exist.
 
     \b

@@ -157,7 +157,8 @@ def diff(
     """Compare CURRENT with BASELINE: faults, status changes, FaultEvents and clusters.
 
     Each side is a JSON report (a .json file written by `analyze --json`) or a recording or
-    script, replayed now with the --config files. Exit status: 0 equal, 1 different, 2 bad input.
+    script, replayed now with the --config files. Exit status: 0 equal; 1 different; 2 bad
+    usage or input (not a report, a recording that cannot be read, an invalid config).
 
     \b
     Examples:

@@ -88,7 +88,8 @@ def explain(
     Every report that reached it (its bridge, topic and recorded message; accepted or why
     rejected; the debounce counter after it and the thresholds in force), the requests held
     before the manager, each status change and its cause, the events published or withheld,
-    and every correlation decision. A code that never appears exits 2 naming the nearest ones.
+    and every correlation decision. Exit status: 0 done; 2 bad usage, an input that cannot be
+    read, an invalid config, or a code that never appears (naming the nearest ones).
 
     \b
     Examples:

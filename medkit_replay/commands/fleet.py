@@ -66,8 +66,9 @@ def fleet(
 
     Recordings: rosbag2 folders, bare .mcap and .db3 files, ROS 1 .bag files, .jsonl scripts.
     A recording that cannot be replayed, times out or whose worker dies is reported in its
-    row; the others still run. Exit status: 1 when --budget is given and a run failed it
-    (nothing replayed fails it too, unless --allow-empty) or failed at all.
+    row; the others still run. Exit status: 0 done, also when a recording cannot be read; 1 with
+    --budget, when a run exceeds it, a recording cannot be read or replayed nothing (unless
+    --allow-empty); 2 bad usage, no recording found, an invalid config or budget.
 
     \b
     Examples:

@@ -70,6 +70,8 @@ def follow(
     bare .mcap / .db3 file. The recording is only read, never locked or changed. When it is
     finished (metadata.yaml written; a bare MCAP's footer), or on Ctrl-C / SIGTERM, the
     reports are written as by 'analyze' (for a finished recording, the very same bytes).
+    Exit status: 0 the reports are written; 2 bad usage, a recording that cannot be followed,
+    an invalid config, or an output over the recording.
 
     \b
     Examples:

@@ -104,7 +104,9 @@ def suggest_rules(
     --min-support runs and --min-confidence of the runs it confirmed in; an auto-cluster rule
     for codes that confirm together as often. The file is in upstream's correlation schema,
     each rule with its support and confidence as comments: point
-    fault_manager.correlation.config_file at it (try it with ``sweep`` first).
+    fault_manager.correlation.config_file at it (try it with ``sweep`` first). Exit status: 0
+    done, also when a recording cannot be read; 2 bad usage, no recording found, an invalid
+    config.
 
     \b
     Examples:

@@ -86,8 +86,9 @@ def sweep(
     The grid is every combination of the --vary values, each over the layered --config files;
     any parameter of any node may vary, file-valued ones too (paths relative to the current
     folder). Each input is read once per worker and bridge setting, its requests fed to every
-    variant. Exit status: 1 when --budget is given and a variant failed it on some input
-    (nothing replayed fails it too, unless --allow-empty).
+    variant. Exit status: 0 done, also when an input cannot be read; 1 with --budget, when a
+    variant is over budget on some input, an input cannot be read or replayed nothing (unless
+    --allow-empty); 2 bad usage, an invalid config or grid.
 
     \b
     Examples:

@@ -50,6 +50,26 @@ def _is_special(target: Path) -> bool:
     return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
+_PARTIAL = ".partial"
+
+
+def _partial_prefix(target: Path, pid: int) -> str:
+    """How the temporary files process ``pid`` writes for ``target`` begin (a hidden name)."""
+    return f".{target.name}.{pid}."
+
+
+def remove_partials(targets: Iterable[Path], pid: int) -> None:
+    """Remove the temporary files process ``pid`` left beside ``targets`` (it was killed while
+    writing them: nothing of its own could remove them). Only that process's files go."""
+    for target in targets:
+        prefix = _partial_prefix(Path(target), pid)
+        with suppress(OSError), os.scandir(Path(target).parent) as entries:
+            for entry in entries:
+                if entry.name.startswith(prefix) and entry.name.endswith(_PARTIAL):
+                    with suppress(OSError):
+                        Path(entry.path).unlink()
+
+
 @contextmanager
 def atomic_binary(target: Path) -> Iterator[IO[bytes]]:
     """Open ``target`` for binary writing through a temporary file renamed into place on success.
@@ -65,7 +85,7 @@ def atomic_binary(target: Path) -> Iterator[IO[bytes]]:
     if target.is_dir():
         raise IsADirectoryError(21, "Is a directory", str(target))
     handle, temporary = tempfile.mkstemp(
-        prefix=f".{target.name}.", suffix=".partial", dir=target.parent
+        prefix=_partial_prefix(target, os.getpid()), suffix=_PARTIAL, dir=target.parent
     )
     try:
         with os.fdopen(handle, "wb") as stream:

@@ -11,7 +11,7 @@ import pytest
 
 from medkit_replay.cli import main
 from medkit_replay.errors import ConfigError
-from medkit_replay.outputs.forked import Forked, ForkedError
+from medkit_replay.outputs.forked import Forked
 from tests.outputs.scripts import healing_config, mission
 
 if TYPE_CHECKING:
@@ -50,13 +50,40 @@ def test_the_childs_errors_come_back_as_raised() -> None:
     def refuse() -> None:
         raise ConfigError("bad value", path="p.yaml", line=4)
 
-    with pytest.raises(ConfigError, match=r"^p\.yaml:4: bad value$"), Forked(refuse):
+    with pytest.raises(ConfigError, match=r"^p\.yaml:4: bad value$"), Forked([("page", refuse)]):
         pass
 
+
+def test_what_the_child_left_undone_is_done_here(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A job that fails otherwise (a bug) is run again here, with what followed it; the jobs the
+    child finished are not. A bug raises here what it raised there."""
+    done: list[tuple[str, int]] = []
+    here = os.getpid()
+
+    def first() -> None:
+        (tmp_path / "first").write_text(str(os.getpid()))
+
     def bug() -> None:
+        if os.getpid() != here:
+            raise ValueError("oops")
+        done.append(("bug", os.getpid()))
+
+    with Forked([("first", first), ("second", bug), ("third", lambda: done.append(("third", 0)))]):
+        pass
+    assert (tmp_path / "first").read_text() != str(here)
+    assert done == [("bug", here), ("third", 0)]
+    warning = capsys.readouterr().err
+    assert warning == (
+        "medkit-replay: warning: the process writing second, third failed (ValueError: oops); "
+        "second, third written by the main one instead\n"
+    )
+
+    def always() -> None:
         raise ValueError("oops")
 
-    with pytest.raises(ForkedError, match="ValueError: oops"), Forked(bug):
+    with pytest.raises(ValueError, match="oops"), Forked([("page", always)]):
         pass
 
 
@@ -67,7 +94,7 @@ def test_a_failure_here_ends_the_child(tmp_path: Path) -> None:
         time.sleep(30)
         marker.write_text("the child outlived its parent's failure")
 
-    with pytest.raises(RuntimeError), Forked(slow) as forked:
+    with pytest.raises(RuntimeError), Forked([("slow", slow)]) as forked:
         pid = forked._pid
         assert pid is not None
         raise RuntimeError("the report could not be written")
@@ -83,12 +110,12 @@ def test_no_process_to_be_had_does_the_work_here(monkeypatch: pytest.MonkeyPatch
 
     monkeypatch.setattr(os, "fork", refuse)
     done: list[int] = [os.getpid()]
-    with Forked(lambda: done.append(os.getpid())):
+    with Forked([("pid", lambda: done.append(os.getpid()))]):
         pass
     assert done == [os.getpid(), os.getpid()]
 
     def refuse_with_error() -> None:
         raise ConfigError("bad value", path="p.yaml")
 
-    with pytest.raises(ConfigError, match="bad value"), Forked(refuse_with_error):
+    with pytest.raises(ConfigError, match="bad value"), Forked([("e", refuse_with_error)]):
         pass
