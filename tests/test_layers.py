@@ -152,7 +152,7 @@ def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
 
 PACKAGE = Path(__file__).resolve().parents[1] / "medkit_replay"
 
-NEUTRAL = {"model", "errors", "version", "text", "wildcards"}
+NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases"}
 """Values and vocabulary every layer may use; they import nothing of ours but each other."""
 ALLOWED: dict[str, set[str]] = {
     "model": set(),
@@ -160,19 +160,30 @@ ALLOWED: dict[str, set[str]] = {
     "version": set(),
     "text": {"model"},
     "wildcards": set(),
+    "releases": set(),
     "files": {"errors"},
     "yaml_bounds": {"errors", "text"},
     "spool": {"errors"},
-    "result": {"model"},
+    "result": {"model", "releases"},
     "trace": {"model"},
-    "engine": {"model", "wildcards"},
-    "bridges": {"model", "engine", "trace"},
-    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs"},
+    "engine": {"model", "wildcards", "releases"},
+    "bridges": {"model", "engine", "trace", "releases"},
+    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases"},
     # config reads parameters into the settings types of the layers it configures.
-    "config": {"model", "errors", "files", "yaml_bounds", "text", "engine", "bridges", "evidence"},
+    "config": {
+        "model",
+        "errors",
+        "files",
+        "yaml_bounds",
+        "text",
+        "engine",
+        "bridges",
+        "evidence",
+        "releases",
+    },
     # evidence plans captures from a Result's records and reads them back from the inputs.
     "evidence": NEUTRAL | {"files", "yaml_bounds", "inputs", "msgdefs"},
-    "parity": {"model", "bridges", "config"},
+    "parity": {"model", "bridges", "config", "releases"},
     "pipeline": NEUTRAL
     | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace", "evidence"},
     # explaining reads a Result and the FaultTrace the replay filled; it draws through outputs.

@@ -1,0 +1,69 @@
+"""The upstream ros2_medkit releases the replay models, and what each one does differently.
+
+A Release is decided once, at configuration time, from ``medkit_replay.upstream_release``; every
+rule that differs between releases reads one of its fields (never the release's name).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["DEFAULT_RELEASE", "RELEASES", "Release", "release_named"]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Release:
+    """One upstream release: its name, the commit modelled, and its behaviour switches.
+
+    Attributes:
+        name: the version users see (``ros2 pkg xml ros2_medkit_fault_manager``).
+        commit: the upstream commit whose code the replay follows for this release.
+        date: when that commit was made (the release date for a tagged release).
+        max_fault_code_length: the longest ``fault_code`` the fault manager accepts
+            (128 up to 505bc2d5; 256 from #591, in 0.7.0).
+    """
+
+    name: str
+    commit: str
+    date: str
+    max_fault_code_length: int
+
+
+RELEASES: dict[str, Release] = {
+    release.name: release
+    for release in (
+        # The bloom release apt installs on Humble, Jazzy and Lyrical.
+        Release(
+            name="0.6.0",
+            commit="bdcc4ed0",
+            date="2026-06-22",
+            max_fault_code_length=128,
+        ),
+        # main at 505bc2d5 (2026-08-22) plus #591; tagged 2026-08-27.
+        Release(
+            name="0.7.0",
+            commit="505bc2d5+#591",
+            date="2026-08-27",
+            max_fault_code_length=256,
+        ),
+    )
+}
+"""Every release the replay models, oldest first."""
+
+DEFAULT_RELEASE = "0.7.0"
+"""The newest release: modelled unless a config says otherwise."""
+
+
+def release_named(name: str) -> Release:
+    """The release called ``name``.
+
+    Raises:
+        KeyError: no release of that name is modelled (the message lists those that are).
+    """
+    try:
+        return RELEASES[name]
+    except KeyError:
+        known = ", ".join(RELEASES)
+        raise KeyError(
+            f"upstream_release {name!r} is not a release the replay models ({known})"
+        ) from None
