@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["DEFAULT_RELEASE", "RELEASES", "Release", "release_named"]
+__all__ = ["DEFAULT_RELEASE", "RELEASES", "Release", "default_release", "release_named"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -67,3 +67,8 @@ def release_named(name: str) -> Release:
         raise KeyError(
             f"upstream_release {name!r} is not a release the replay models ({known})"
         ) from None
+
+
+def default_release() -> Release:
+    """The release modelled when no config names one (DEFAULT_RELEASE)."""
+    return RELEASES[DEFAULT_RELEASE]

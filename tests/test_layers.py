@@ -54,8 +54,9 @@ def test_engine_sources_never_read_a_clock() -> None:
 
 
 def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipeline() -> None:
-    # follow mode polls with time.monotonic/time.sleep in inputs/follow.py, and a remote read
-    # waits before a retry in inputs/remote_store.py; what the replay computes keeps bag time
+    # follow mode polls with time.monotonic/time.sleep in inputs/follow.py, a remote read
+    # waits before a retry in inputs/remote_store.py and measures a stalled transfer's speed in
+    # inputs/remote_fetch.py; what the replay computes keeps bag time
     # (the pipeline reads no clock either).
     root = Path(__file__).resolve().parents[1] / "medkit_replay"
     users = sorted(
@@ -64,7 +65,7 @@ def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipelin
         for path in (root / folder).rglob("*.py")
         if any(needle in path.read_text() for needle in ("import time", "monotonic", "sleep("))
     )
-    assert users == ["inputs/follow.py", "inputs/remote_store.py"]
+    assert users == ["inputs/follow.py", "inputs/remote_fetch.py", "inputs/remote_store.py"]
 
 
 def test_remote_clients_load_only_for_remote_inputs() -> None:

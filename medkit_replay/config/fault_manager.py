@@ -17,21 +17,25 @@ from medkit_replay.engine.manager import FaultManagerConfig
 from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
+from medkit_replay.releases import default_release
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import NodeParams
     from medkit_replay.engine.thresholds import EntityOverride
+    from medkit_replay.releases import Release
 
 DEFAULT_CLEANUP_INTERVAL_SEC = 5.0
 
 
-def fault_manager_config(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
+def fault_manager_config(
+    params: NodeParams, release: Release | None = None
+) -> tuple[FaultManagerConfig, list[str]]:
     """Build the manager's config from its parameters, with upstream's warnings (§1.2).
 
     Raises:
         ConfigError: a parameter of the wrong type, with its file and line.
     """
-    return located(params, lambda: _build(params))
+    return located(params, lambda: _build(params, release or default_release()))
 
 
 def _int32(reader: ParameterReader, name: str, value: int, default: int) -> int:
@@ -57,7 +61,7 @@ def _auto_confirm_ns(seconds: float) -> int:
     return max(window, 1) if seconds > 0 else window
 
 
-def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
+def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     warnings = reader.warnings
     conf = reader.integer("confirmation_threshold", -1)
@@ -152,5 +156,6 @@ def _build(params: NodeParams) -> tuple[FaultManagerConfig, list[str]]:
         entity_overrides=tuple(overrides),
         correlation=correlation,
         cleanup_interval_ns=cleanup_ms * NS_PER_MS,
+        release=release,
     )
     return config, warnings

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
 
 if TYPE_CHECKING:
@@ -36,8 +37,9 @@ def config_files(configs: Iterable[str | Path], *, check: bool = True) -> list[P
     paths = [Path(c) for c in configs]
     params = load_parameters(paths)
     if check:
-        fault_manager_config(params.node("fault_manager"))
-        replay_options(params)
+        release = release_of(params)
+        fault_manager_config(params.node("fault_manager"), release)
+        replay_options(params, release)
     named = params.node("fault_manager")
     found = list(paths)
     for name in FILE_PARAMETERS:

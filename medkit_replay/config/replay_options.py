@@ -19,6 +19,7 @@ from medkit_replay.config.bridges import (
 from medkit_replay.config.nodes import located, values
 from medkit_replay.config.reader import ParameterReader
 from medkit_replay.errors import ConfigError
+from medkit_replay.releases import Release, default_release
 
 if TYPE_CHECKING:
     from medkit_replay.config.params import ParameterSet
@@ -42,10 +43,16 @@ class ReplayOptions:
     diagnostic: DiagnosticBridgeConfig = field(default_factory=DiagnosticBridgeConfig)
     action_status: ActionStatusBridgeConfig = field(default_factory=ActionStatusBridgeConfig)
     log: LogBridgeConfig = field(default_factory=LogBridgeConfig)
+    release: Release = field(default_factory=default_release)
+    """The upstream release modelled (``medkit_replay.upstream_release``)."""
 
 
-def replay_options(params: ParameterSet) -> tuple[ReplayOptions, list[str]]:
-    """Read ``medkit_replay`` and the three bridge nodes from the merged parameter files."""
+def replay_options(
+    params: ParameterSet, release: Release | None = None
+) -> tuple[ReplayOptions, list[str]]:
+    """Read ``medkit_replay`` and the three bridge nodes from the merged parameter files, for
+    ``release`` (the newest when None)."""
+    release = release or default_release()
     warnings: list[str] = []
     own = params.node("medkit_replay")
 
@@ -82,6 +89,7 @@ def replay_options(params: ParameterSet) -> tuple[ReplayOptions, list[str]]:
             diagnostic=diagnostic,
             action_status=action,
             log=log,
+            release=release,
         ),
         warnings,
     )

@@ -21,17 +21,21 @@ if TYPE_CHECKING:
     from pathlib import Path
 
     from medkit_replay.config.params import NodeParams
+    from medkit_replay.releases import Release
 
 _P = "snapshots."
 _R = "snapshots.rosbag."
 
 
-def snapshot_config(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
+def snapshot_config(
+    params: NodeParams, release: Release | None = None
+) -> tuple[SnapshotConfig, list[str]]:
     """Build the capture config from the fault_manager node's parameters.
 
     Raises:
         ConfigError: a parameter of the wrong type, with its file and line.
     """
+    del release  # no capture rule reads the release yet
     return located(params, lambda: _build(params))
 
 

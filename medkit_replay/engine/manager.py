@@ -29,6 +29,7 @@ from medkit_replay.model import (
     RetroactiveMute,
     Status,
 )
+from medkit_replay.releases import Release, default_release
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -70,6 +71,8 @@ class FaultManagerConfig:
     entity_overrides: tuple[EntityOverride, ...] = ()
     correlation: CorrelationConfig | None = None
     cleanup_interval_ns: int = 5 * NS_PER_SEC
+    release: Release = field(default_factory=default_release)
+    """The upstream release modelled: which of the rules that changed between releases apply."""
 
 
 class FaultManager:

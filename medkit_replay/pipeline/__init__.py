@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from medkit_replay.config.effective import effective_config
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.config.snapshots import snapshot_config
 from medkit_replay.engine.manager import FaultManager
@@ -108,10 +109,11 @@ def replay(
     paths = [p if is_remote(p) else Path(p) for p in inputs]
     configs = tuple(configs)  # read twice when a followed recording is replayed again
     params = load_parameters(Path(c) for c in configs)
-    manager_config, warnings = fault_manager_config(params.node("fault_manager"))
-    options, option_warnings = replay_options(params)
+    release = release_of(params)
+    manager_config, warnings = fault_manager_config(params.node("fault_manager"), release)
+    options, option_warnings = replay_options(params, release)
     warnings += option_warnings
-    snapshots, snapshot_warnings = snapshot_config(params.node("fault_manager"))
+    snapshots, snapshot_warnings = snapshot_config(params.node("fault_manager"), release)
     warnings += snapshot_warnings
 
     listener = spill_listener

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, cast
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import KNOWN_NODES, Param, ParameterSet, parse_value
 from medkit_replay.config.referenced import FILE_PARAMETERS
+from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.errors import ConfigError
 
@@ -228,8 +229,9 @@ def variant_config(base: ParameterSet, variant: Variant) -> VariantConfig:
     """
     params = variant_parameters(base, variant.settings)
     try:
-        manager, warnings = fault_manager_config(params.node("fault_manager"))
-        options, option_warnings = replay_options(params)
+        release = release_of(params)
+        manager, warnings = fault_manager_config(params.node("fault_manager"), release)
+        options, option_warnings = replay_options(params, release)
     except ConfigError as err:
         if err.path != str(VARY_SOURCE):
             raise
