@@ -27,6 +27,9 @@ class Release:
     commit: str
     date: str
     max_fault_code_length: int
+    # -- the fault manager's storage and status rules (engine) --
+    # -- the bridges and the reporter (bridges, config) --
+    # -- messages, freeze frames and black-box recordings (evidence, outputs, parity) --
 
 
 RELEASES: dict[str, Release] = {
@@ -38,6 +41,9 @@ RELEASES: dict[str, Release] = {
             commit="bdcc4ed0",
             date="2026-06-22",
             max_fault_code_length=128,
+            # -- engine --
+            # -- bridges --
+            # -- evidence --
         ),
         # main at 505bc2d5 (2026-08-22) plus #591; tagged 2026-08-27.
         Release(
@@ -45,6 +51,9 @@ RELEASES: dict[str, Release] = {
             commit="505bc2d5+#591",
             date="2026-08-27",
             max_fault_code_length=256,
+            # -- engine --
+            # -- bridges --
+            # -- evidence --
         ),
     )
 }
