@@ -11,7 +11,7 @@ from operator import attrgetter
 from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar, get_args
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterator
+    from collections.abc import Callable, Iterable, Iterator
 
 Origin = Literal[
     "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
@@ -297,6 +297,77 @@ class TopicSummary:
     type: str
     role: str | None
     messages: int
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Loss:
+    """Part of an input skipped as damaged, or the total of several: what it cost (None: unknown).
+
+    Attributes:
+        input: the input it belongs to, as given (empty in a total over several inputs).
+        messages: messages skipped; bytes: bytes of the file skipped.
+        start_ns, end_ns: the bag (log) time span the skipped part covered.
+        more_messages, more_bytes: a total to which losses of unknown size add more.
+    """
+
+    input: str = ""
+    messages: int | None = None
+    bytes: int | None = None
+    start_ns: int | None = None
+    end_ns: int | None = None
+    more_messages: bool = False
+    more_bytes: bool = False
+
+    def text(self) -> str:
+        """``1,234 messages (3.4 MB) from bag time 12.000 s to 14.500 s skipped``, with
+        ``unknown`` (or ``at least``) where the reader could not tell."""
+        if self.bytes is None and (self.start_ns is None or self.end_ns is None):
+            if self.messages is None:
+                return "how much was skipped is unknown"
+            if self.messages == 0 and not self.more_messages:
+                return "no message skipped"
+        if self.messages is None:
+            messages = "an unknown number of messages"
+        else:
+            plural = "" if self.messages == 1 else "s"
+            least = "at least " if self.more_messages else ""
+            messages = f"{least}{self.messages:,} message{plural}"
+        if self.bytes is None:
+            size = "size unknown"
+        else:
+            size = ("at least " if self.more_bytes else "") + _size_text(self.bytes)
+        if self.start_ns is None or self.end_ns is None:
+            span = "at unknown bag times"
+        else:
+            span = f"from bag time {_sec(self.start_ns)} s to {_sec(self.end_ns)} s"
+        return f"{messages} ({size}) {span} skipped"
+
+
+def _sec(ns: int) -> str:
+    return f"{ns / NS_PER_SEC:.3f}"
+
+
+def _size_text(count: int) -> str:
+    return f"{count / 1e6:,.1f} MB" if count >= 100_000 else f"{count:,} bytes"
+
+
+def total_loss(losses: Iterable[Loss], input: str = "") -> Loss:
+    """All of ``losses`` as one: the known counts summed (``at least`` when some are unknown),
+    the span from the earliest known start to the latest known end."""
+    items = list(losses)
+    messages = [loss.messages for loss in items if loss.messages is not None]
+    sizes = [loss.bytes for loss in items if loss.bytes is not None]
+    starts = [loss.start_ns for loss in items if loss.start_ns is not None]
+    ends = [loss.end_ns for loss in items if loss.end_ns is not None]
+    return Loss(
+        input=input,
+        messages=sum(messages) if messages else None,
+        bytes=sum(sizes) if sizes else None,
+        start_ns=min(starts) if starts and ends else None,
+        end_ns=max(ends) if starts and ends else None,
+        more_messages=bool(messages) and len(messages) < len(items),
+        more_bytes=bool(sizes) and len(sizes) < len(items),
+    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
         FaultEvent,
         FaultSnapshot,
         InputSummary,
+        Loss,
         MutedFault,
         NearMiss,
         ReportRecord,
@@ -81,6 +82,13 @@ class Result:
     evidence_notes: tuple[str, ...] = ()
     fetched: dict[str, tuple[int, int]] = field(default_factory=dict)
     """Remote inputs by name: (bytes fetched, bytes of their files); not in the JSON report."""
+    losses: tuple[Loss, ...] = ()
+    """What damage cost, one per damage warning (each also in ``warnings``, which say it); not
+    in the JSON report as a key of its own."""
+
+    def lost(self) -> Loss | None:
+        """Everything damage cost, summed over the inputs; None when nothing was lost."""
+        return model.total_loss(self.losses) if self.losses else None
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.merge import Bound, Timed
+    from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection, Raw
 
 
@@ -41,7 +42,7 @@ class McapTail(McapFile):
         self,
         path: Path,
         file_no: int,
-        warn: Callable[[str], None],
+        warn: Warn,
         *,
         follow: Follow,
         done: Callable[[], bool],
@@ -110,7 +111,7 @@ class McapTail(McapFile):
                     if self._chunks is None:  # read without an index, as analyze would
                         self.counts, self.start_ns, self.end_ns = counted
                         if problem:
-                            self.warn(f"{self.path}: {problem}; scanning the file from the start")
+                            self.summary_problem(problem)
                     return
             self._follow.wait()
 
@@ -126,7 +127,7 @@ class McapTail(McapFile):
             if moved_on:
                 if not self._unfinished:  # said as a finished file without its end says it
                     self._unfinished = True
-                    self.warn(f"{self.path}: {NO_FOOTER}; scanning the file from the start")
+                    self.summary_problem(NO_FOOTER)
                 return False
             self._follow.wait()
 

@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.remote_store import Tally
-    from medkit_replay.model import InputSummary
+    from medkit_replay.model import InputSummary, Loss
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.tracing import Tracer
     from medkit_replay.result import Result
@@ -243,6 +243,7 @@ def replay(
         recordings=found.recordings,
         evidence_notes=found.notes,
         fetched=fetched,
+        losses=run.losses,
     )
 
 
@@ -269,12 +270,14 @@ class Pass:
         gate: the double-counting gate, with what it withheld.
         warnings: the recording's own warnings (damage, refusals).
         summaries: one summary per input.
+        losses: what the damage warned of cost, one per damage warning.
     """
 
     messages: int
     gate: Gate
     warnings: list[str]
     summaries: tuple[InputSummary, ...]
+    losses: tuple[Loss, ...] = ()
 
 
 def replay_pass(
@@ -320,4 +323,10 @@ def replay_pass(
         messages = replay_loop(recording, meter, clock, router, gate, spools, tracer)
         if meter is not None:
             meter.finish(messages, clock.last_ns)
-        return Pass(messages, gate, list(recording.warnings), tuple(recording.inputs))
+        return Pass(
+            messages,
+            gate,
+            list(recording.warnings),
+            tuple(recording.inputs),
+            tuple(recording.losses),
+        )
