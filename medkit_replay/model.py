@@ -370,6 +370,24 @@ def total_loss(losses: Iterable[Loss], input: str = "") -> Loss:
     )
 
 
+def losses_by_input(losses: Iterable[Loss]) -> tuple[Loss, ...]:
+    """One total per input that lost anything, in the order their first loss was met."""
+    grouped: dict[str, list[Loss]] = {}
+    for loss in losses:
+        grouped.setdefault(loss.input, []).append(loss)
+    return tuple(total_loss(group, name) for name, group in grouped.items())
+
+
+def read_in_part(loss: Loss) -> str:
+    """One line saying what an input's damage cost, in total (``loss`` from losses_by_input)."""
+    return f"{loss.input}: read only in part: {loss.text()}"
+
+
+def strict_failure(loss: Loss) -> str:
+    """The one line with which ``--strict`` fails a recording read only in part."""
+    return f"{read_in_part(loss)} (--strict fails it)"
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class InputSummary:
     """What one input file held."""

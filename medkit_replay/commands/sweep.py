@@ -13,7 +13,14 @@ from pathlib import Path
 
 import click
 
-from medkit_replay.commands import config_option, executor_options, input_argument, local_paths
+from medkit_replay.commands import (
+    config_option,
+    executor_options,
+    input_argument,
+    local_paths,
+    say_damage,
+    strict_option,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import warn
@@ -53,6 +60,7 @@ from medkit_replay.outputs.console import warn
     help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
+@strict_option()
 def sweep(
     inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
@@ -64,13 +72,15 @@ def sweep(
     out_dir: Path | None,
     html_path: Path | None,
     quiet: bool,
+    strict: bool,
 ) -> None:
     """Replay INPUT... once per variant of a grid of settings and rank the variants.
 
     The grid is every combination of the --vary values, each over the layered --config files;
     any parameter of any node may vary, file-valued ones too (paths relative to the current
     folder). Each input is read once per worker and bridge setting, its requests fed to every
-    variant. Exit status: 1 when --budget is given and a variant failed it on some input.
+    variant. Exit status: 1 when --budget is given and a variant failed it on some input
+    (with --strict, also when an input was read only in part).
 
     \b
     Examples:
@@ -98,6 +108,8 @@ def sweep(
 
     if dask_address is not None and jobs is not None:
         raise click.UsageError("--jobs and --dask cannot be used together")
+    if strict and budget is None:
+        raise click.UsageError("--strict fails inputs of a budget check: give --budget too")
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
     config_paths = config_files(configs)
@@ -175,6 +187,8 @@ def sweep(
             )
             print_summary(sys.stdout, parts)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
+    if strict and say_damage(outcome.lost):
+        over = True
     if parsed_budget is not None and over:
         click.get_current_context().exit(1)
 

@@ -51,7 +51,7 @@ def _restore_modules() -> None:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """Add ``--update-golden``."""
+    """Add ``--update-golden`` and ``--medkit-replay-strict``."""
     group = parser.getgroup("medkit-replay", "medkit-replay regression tests")
     group.addoption(
         "--update-golden",
@@ -59,6 +59,13 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         default=False,
         dest="medkit_replay_update_golden",
         help="medkit-replay: write golden reports that differ or are missing instead of failing.",
+    )
+    group.addoption(
+        "--medkit-replay-strict",
+        action="store_true",
+        default=False,
+        dest="medkit_replay_strict",
+        help="medkit-replay: assert_within_budget fails a recording read only in part (damage).",
     )
 
 
@@ -90,6 +97,13 @@ def update_requested() -> bool:
     if not _configs:
         return False
     return bool(_configs[-1].getoption("medkit_replay_update_golden"))
+
+
+def strict_requested() -> bool:
+    """Whether ``--medkit-replay-strict`` was given (False outside a pytest session)."""
+    if not _configs:
+        return False
+    return bool(_configs[-1].getoption("medkit_replay_strict"))
 
 
 def note_updated(path: Path) -> None:

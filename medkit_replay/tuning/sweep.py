@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
     from medkit_replay.checks import Budget
+    from medkit_replay.model import Loss
     from medkit_replay.tuning.grid import Variant, Vary
 
 TABLES = ("runs", "run_codes", "variants", "codes")
@@ -113,6 +114,8 @@ class Outcome:
     variants: tuple[VariantTotal, ...]
     codes: tuple[CodeTotal, ...]
     failed: tuple[RunRow, ...]
+    lost: tuple[Loss, ...] = ()
+    """What damage cost each input read only in part, in input order."""
 
 
 def _columns(grid: Grid, names: Sequence[str]) -> list[str]:
@@ -146,6 +149,7 @@ def run_sweep(
     }
     totals = Totals(grid.variants)
     failed: list[RunRow] = []
+    lost: dict[str, Loss] = {}
     writers: list[TableWriter] = []
 
     def open_writers() -> None:
@@ -166,6 +170,8 @@ def run_sweep(
 
     def take(part: SweepPart) -> None:
         open_writers()
+        if part.lost is not None:  # an input's several jobs each say it
+            lost.setdefault(part.lost.input, part.lost)
         for row in part.runs:
             totals.add_run(row)
             if row.error:
@@ -204,7 +210,7 @@ def run_sweep(
         raise
     for writer in writers:
         writer.__exit__(None, None, None)
-    return Outcome(tuple(variant_totals), code_totals, tuple(failed))
+    return Outcome(tuple(variant_totals), code_totals, tuple(failed), tuple(lost.values()))
 
 
 def _kinds(grid: Grid, record: type[Any]) -> dict[str, str]:
