@@ -351,7 +351,7 @@ class Db3File:
         data, large = losses["data"], losses["large"]
         if data.count:
             self.warn(
-                f"{self.path}: {_rows(data.count)} without a binary payload skipped "
+                f"{self.path}: {_rows(data.count)} without a binary payload "
                 f"({_ids(data.ids, data.count)})",
                 Loss(messages=data.count),
             )
@@ -359,7 +359,7 @@ class Db3File:
             shown = _ids(large.ids, large.count)
             self.warn(
                 f"{self.path}: {_rows(large.count)} with a payload that cannot be loaded "
-                f"within the {MESSAGE_SIZE_LIMIT:,}-byte limit skipped ({shown})",
+                f"within the {MESSAGE_SIZE_LIMIT:,}-byte limit ({shown})",
                 Loss(messages=large.count),
             )
 
@@ -485,7 +485,7 @@ class Db3File:
             count = found
         if count:
             self.warn(
-                f"{self.path}: {_rows(count)} skipped: {_TIME_RULE} ({_ids(ids, count)})",
+                f"{self.path}: {_rows(count)}: {_TIME_RULE} ({_ids(ids, count)})",
                 Loss(messages=count),
             )
 

@@ -637,8 +637,7 @@ class McapFile:
     def _late_message(self, where: str, count: int, t_ns: int) -> None:
         what = "a log time" if count == 1 else f"{count} messages with log times"
         self.warn(
-            f"{where}: {what} at or after 2^63 ns ({t_ns}), which ROS 2 cannot record; "
-            "damaged, skipped",
+            f"{where}: {what} at or after 2^63 ns ({t_ns}), which ROS 2 cannot record; damaged",
             Loss(messages=count),
         )
 
@@ -675,7 +674,7 @@ class McapFile:
             return
         if size > RECORD_SIZE_LIMIT:
             self.warn(
-                f"{where} ({span}) claims {size} bytes uncompressed; skipped as damaged",
+                f"{where} ({span}) claims {size} bytes uncompressed: damaged",
                 self._lost_chunk(body, indexed),
             )
             return

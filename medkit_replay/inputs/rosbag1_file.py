@@ -367,7 +367,7 @@ class Bag1File:
             self.warn(f"{where}: compression {compression!r} is not supported; it is lost", lost)
             return []
         if size > RECORD_SIZE_LIMIT:
-            self.warn(f"{where} claims {size} bytes uncompressed; skipped as damaged", lost)
+            self.warn(f"{where} claims {size} bytes uncompressed: damaged", lost)
             return []
         try:
             compressed = self._read_at(start, end - start)

@@ -193,7 +193,7 @@ def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path)
         ("chunk_header_len", 0xFFFFFFF0, "damaged record at byte"),
         ("chunk_data_len", 0xFFFFFFF0, "damaged record at byte"),
         ("chunk_data_len", 0x3FFFFFF0, "file ends inside a record"),
-        ("chunk_size", 0xFFFFFFF0, "bytes uncompressed; skipped as damaged"),
+        ("chunk_size", 0xFFFFFFF0, "bytes uncompressed: damaged"),
         ("chunk_size", 0x3FFFFFF0, "cannot be decompressed"),
         ("message_data_len", 0xFFFFFFF0, "runs past it"),
         ("index_pos", 0xFFFFFFFFFFFFFFF0, "is beyond the end of the file"),
