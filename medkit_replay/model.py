@@ -323,9 +323,9 @@ class Loss:
         ``unknown`` (or ``at least``) where the reader could not tell."""
         if self.bytes is None and (self.start_ns is None or self.end_ns is None):
             if self.messages is None:
-                return "how much was skipped is unknown"
+                return "how much was lost is unknown"
             if self.messages == 0 and not self.more_messages:
-                return "no message skipped"
+                return "no message lost"
         if self.messages is None:
             messages = "an unknown number of messages"
         else:

@@ -21,12 +21,13 @@ def report_skipped(
     ``late`` messages (count, first log time)."""
     for topic, (count, first, last, reason) in sorted(failures.items()):
         warn(
-            f"messages on {topic} cannot be decoded (first at t={first}: {reason})",
+            f"{count} messages on {topic} cannot be decoded and were skipped "
+            f"(first at t={first}: {reason})",
             Loss(messages=count, start_ns=first, end_ns=last),
         )
     if late[0]:
         warn(
-            "messages are stored too far out of time order to be replayed in order "
-            f"(first at t={late[1]})",
+            f"{late[0]} messages are stored too far out of time order to be "
+            f"replayed in order and were skipped (first at t={late[1]})",
             Loss(messages=late[0]),
         )

@@ -104,7 +104,7 @@ def test_truncated_mcap_names_what_was_lost(tmp_path: Path) -> None:
     assert names(messages) == EVERYTHING[:15]
     path = tmp_path / "cut.mcap"
     no_footer = "no footer (the recorder did not close the file); scanning the file from the start"
-    assert warnings[0] == f"{path}: {no_footer}; how much was skipped is unknown"
+    assert warnings[0] == f"{path}: {no_footer}; how much was lost is unknown"
     assert warnings[1] == (
         f"{path}: chunk at byte {start} (log times 1015..1019) is cut off and zstd-compressed; "
         "it is lost"
@@ -218,7 +218,7 @@ def test_corrupt_payloads_are_skipped_and_counted(tmp_path: Path) -> None:
     assert names(messages) == ["s1", "s2", "s3"]
     assert len(warnings) == 1
     assert warnings[0].startswith(
-        f"{bag}: messages on /diagnostics cannot be decoded (first at t=1000: "
+        f"{bag}: 1 messages on /diagnostics cannot be decoded and were skipped (first at t=1000: "
     )
     assert warnings[0].endswith(
         "; 1 message (size unknown) from bag time 0.000 s to 0.000 s skipped"

@@ -80,7 +80,7 @@ def test_an_unindexed_bag_is_read_whole_with_a_warning(tmp_path: Path, chunks: A
     assert times(messages) == times(full(bag))
     assert warnings == [
         f"{cut}: not indexed (the recorder stopped before writing its index?); "
-        "its chunks are scanned; how much was skipped is unknown"
+        "its chunks are scanned; how much was lost is unknown"
     ]
     with open_recording([cut]) as recording:
         list(recording.messages())
@@ -133,7 +133,7 @@ def test_a_bag_cut_inside_its_index_is_scanned(tmp_path: Path) -> None:
     assert times(messages) == times(full(bag))
     assert len(warnings) == 1
     assert warnings[0].startswith(f"{cut}: index is damaged (")
-    assert warnings[0].endswith("; its chunks are scanned; no message skipped")
+    assert warnings[0].endswith("; its chunks are scanned; no message lost")
 
 
 @pytest.mark.parametrize("chunks", ["bz2", "lz4"])
@@ -350,5 +350,5 @@ def test_a_bag_left_active_by_its_recorder_is_read(tmp_path: Path) -> None:
     assert times(messages) == times(full(bag))
     assert warnings == [
         f"{active}: not indexed (the recorder stopped before writing its index?); "
-        "its chunks are scanned; how much was skipped is unknown"
+        "its chunks are scanned; how much was lost is unknown"
     ]

@@ -120,7 +120,7 @@ def test_a_truncated_mcap_says_what_is_known_and_what_is_not(tmp_path: Path) -> 
         Loss(input=str(cut)),  # no footer: how much the recorder never wrote is unknown
         Loss(input=str(cut), bytes=80, start_ns=T0 + 15 * STEP, end_ns=T0 + 19 * STEP),
     )
-    assert warnings[0].endswith("scanning the file from the start; how much was skipped is unknown")
+    assert warnings[0].endswith("scanning the file from the start; how much was lost is unknown")
     assert warnings[-1].endswith(
         "the last 80 bytes are lost; an unknown number of messages (80 bytes) from bag time "
         "107.500 s to 109.500 s skipped"
@@ -153,7 +153,7 @@ def test_a_truncated_sqlite_bag_says_the_loss_is_unknown(tmp_path: Path) -> None
     messages, warnings, losses = replayed(cut)
     assert 250 < messages < 300
     assert losses and all(loss == Loss(input=str(cut)) for loss in losses)
-    assert sum(w.endswith("; how much was skipped is unknown") for w in warnings) == len(losses)
+    assert sum(w.endswith("; how much was lost is unknown") for w in warnings) == len(losses)
 
 
 def test_a_corrupt_ros1_chunk_costs_what_its_index_says(tmp_path: Path) -> None:
