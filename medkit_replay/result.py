@@ -86,9 +86,9 @@ class Result:
     """What damage cost, one per damage warning (each also in ``warnings``, which say it); not
     in the JSON report as a key of its own."""
 
-    def lost(self) -> Loss | None:
-        """Everything damage cost, summed over the inputs; None when nothing was lost."""
-        return model.total_loss(self.losses) if self.losses else None
+    def losses_by_input(self) -> tuple[Loss, ...]:
+        """What damage cost, in total per input that lost anything (in the order found)."""
+        return model.losses_by_input(self.losses)
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

@@ -25,7 +25,7 @@ from medkit_replay.checks.budget import (
     seconds_text,
 )
 from medkit_replay.checks.facts import Facts, Offender
-from medkit_replay.model import losses_by_input, strict_failure
+from medkit_replay.model import strict_failure
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
@@ -93,7 +93,7 @@ def check_run(
         budget=budget,
         verdicts=evaluate(budget, result),
         warnings=result.warnings,
-        losses=losses_by_input(result.losses),
+        losses=result.losses_by_input(),
         strict=strict,
     )
 

@@ -99,6 +99,8 @@ def step_summary(runs: Sequence[CheckRun]) -> str:
     unreadable = any(run.error is not None for run in runs)
     budget = runs[0].budget if runs else None
     headline = "budget exceeded ❌" if not unreadable else "a recording cannot be read ❌"
+    if not unreadable and not any(run.failures for run in runs):
+        headline = "a recording was read only in part (--strict) ❌"
     lines = ["## medkit-replay check: " + ("budget holds ✅" if held else headline), ""]
     if budget is not None:
         lines += [f"Budget: {markdown(budget.title)} ({markdown(budget.path)})", ""]

@@ -9,7 +9,7 @@ import difflib
 import re
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import NS_PER_SEC, losses_by_input, strict_failure
+from medkit_replay.model import NS_PER_SEC, strict_failure
 from medkit_replay.pytest_plugin.session import keeping_modules, strict_requested
 from medkit_replay.pytest_plugin.timeline import clean, fault_timeline, recording_start_ns
 from medkit_replay.text import seconds
@@ -185,7 +185,7 @@ def assert_within_budget(
         verdicts = evaluate(budget, result)
     failed = [v for v in verdicts if not v.passed]
     damage = strict_requested() if strict is None else strict
-    damaged = [clean(strict_failure(x)) for x in losses_by_input(result.losses)] if damage else []
+    damaged = [clean(strict_failure(x)) for x in result.losses_by_input()] if damage else []
     if not failed and not damaged:
         return
     if not failed:

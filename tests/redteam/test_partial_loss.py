@@ -234,7 +234,10 @@ def test_check_strict_fails_a_recording_read_in_part(tmp_path: Path) -> None:
         command.startswith("::error title=recording read only in part") and command.endswith(line)
         for command in outcome.stdout.splitlines()
     )
-    assert "❌" in summary
+    assert summary.startswith(
+        "## medkit-replay check: a recording was read only in part (--strict) ❌"
+    )
+    assert f"- ❌ {markdown(line)}" in summary.splitlines()
 
 
 def test_check_strict_passes_a_whole_recording(tmp_path: Path) -> None:
