@@ -16,6 +16,7 @@ from medkit_replay.inputs import Message, open_recording
 from tests.inputs.builders import (
     Compression,
     Storage,
+    chunks,
     diag,
     flipped,
     storage_file,
@@ -47,18 +48,6 @@ def good_bag(tmp_path: Path, storage: Storage, compression: Compression = "none"
         tmp_path / "good", recs, storage=storage, compression=compression, chunk_every=CHUNK
     )
     return storage_file(bag)
-
-
-def chunks(mcap: Path) -> list[tuple[int, int]]:
-    """(start, end) byte offsets of each chunk record of a well-formed MCAP (test-side parser)."""
-    data = mcap.read_bytes()
-    pos, found = 8, []
-    while pos + 9 <= len(data) and data[pos] != 0x0F:
-        end = pos + 9 + int.from_bytes(data[pos + 1 : pos + 9], "little")
-        if data[pos] == 0x06:
-            found.append((pos, end))
-        pos = end
-    return found
 
 
 def chunk_ends(mcap: Path) -> list[int]:

@@ -21,7 +21,7 @@ from medkit_replay.checks.github import markdown
 from medkit_replay.model import Loss
 from medkit_replay.pipeline import replay
 from tests.checks.support import write_budget
-from tests.inputs.builders import diag, flipped, storage_file, truncated, write_bag
+from tests.inputs.builders import chunks, diag, flipped, storage_file, truncated, write_bag
 from tests.inputs.ros1_builders import diag1, patched, records, write_bag1
 from tests.redteam.support import run_limited
 
@@ -45,18 +45,6 @@ def mcap_bag(tmp_path: Path) -> Path:
     recs = [diag(T0 + k * STEP, f"s{k}") for k in range(COUNT)]
     bag = write_bag(tmp_path / "good", recs, compression="chunk", chunk_every=CHUNK)
     return storage_file(bag)
-
-
-def chunks(mcap: Path) -> list[tuple[int, int]]:
-    """(start, end) byte offsets of each chunk record (test-side parser)."""
-    data = mcap.read_bytes()
-    pos, found = 8, []
-    while pos + 9 <= len(data) and data[pos] != 0x0F:
-        end = pos + 9 + int.from_bytes(data[pos + 1 : pos + 9], "little")
-        if data[pos] == 0x06:
-            found.append((pos, end))
-        pos = end
-    return found
 
 
 def corrupt_chunk(tmp_path: Path) -> tuple[Path, Loss]:
