@@ -1,7 +1,7 @@
 """Red team, partial reads: a recording read only in part says how much was lost, everywhere.
 
 An MCAP with one corrupt chunk, one cut short, an sqlite3 bag with a damaged page and one cut
-short, a ROS 1 bag with a corrupt chunk: each warning and the Result's losses give the messages,
+short, a split bag missing a file, a ROS 1 bag with a corrupt chunk: each warning and the Result's losses give the messages,
 bytes and bag time the damage cost (or say it is unknown), checked against what was damaged.
 The verdict of ``check``, ``fleet --budget``, ``sweep --budget`` and the pytest plugin stands;
 ``--strict`` fails them, in one line naming the input and the loss.
@@ -16,6 +16,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import pytest
+import yaml
 
 from medkit_replay.checks.github import markdown
 from medkit_replay.model import Loss
@@ -142,6 +143,36 @@ def test_a_truncated_sqlite_bag_says_the_loss_is_unknown(tmp_path: Path) -> None
     assert 250 < messages < 300
     assert losses and all(loss == Loss(input=str(cut)) for loss in losses)
     assert sum(w.endswith("; how much was lost is unknown") for w in warnings) == len(losses)
+
+
+def test_a_missing_split_file_costs_what_metadata_yaml_lists(tmp_path: Path) -> None:
+    bag = tmp_path / "split"
+    bag.mkdir()
+    files = []
+    for index in range(2):
+        recs = [diag(T0 + (10 * index + k) * STEP, f"s{index}{k}") for k in range(10)]
+        source = storage_file(write_bag(tmp_path / f"part{index}", recs))
+        target = source.rename(bag / f"split_{index}.mcap")
+        files.append(
+            {
+                "path": target.name,
+                "starting_time": {"nanoseconds_since_epoch": recs[0].t_ns},
+                "duration": {"nanoseconds": recs[-1].t_ns - recs[0].t_ns},
+                "message_count": len(recs),
+            }
+        )
+    info = {"version": 9, "storage_identifier": "mcap", "files": files}
+    (bag / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}))
+    (bag / "split_1.mcap").unlink()
+    messages, warnings, losses = replayed(bag)
+    assert messages == 10
+    assert losses == (
+        Loss(input=str(bag), messages=10, start_ns=T0 + 10 * STEP, end_ns=T0 + 19 * STEP),
+    )
+    assert warnings[0] == (
+        f"{bag}/split_1.mcap: listed in metadata.yaml but missing; 10 messages (size unknown) "
+        "from bag time 105.000 s to 109.500 s skipped"
+    )
 
 
 def test_a_corrupt_ros1_chunk_costs_what_its_index_says(tmp_path: Path) -> None:
