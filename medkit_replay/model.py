@@ -307,7 +307,8 @@ class Loss:
         input: the input it belongs to, as given (empty in a total over several inputs).
         messages: messages skipped; bytes: bytes of the file skipped.
         start_ns, end_ns: the bag (log) time span the skipped part covered.
-        more_messages, more_bytes: a total to which losses of unknown size add more.
+        more_messages, more_bytes, more_span: a total to which losses of unknown size (or
+            unknown span) add more.
     """
 
     input: str = ""
@@ -317,6 +318,12 @@ class Loss:
     end_ns: int | None = None
     more_messages: bool = False
     more_bytes: bool = False
+    more_span: bool = False
+
+    @property
+    def nothing(self) -> bool:
+        """Damage that cost no message (nothing else said of it)."""
+        return self.messages == 0 and self.bytes is None and self.start_ns is None
 
     def text(self) -> str:
         """``1,234 messages (3.4 MB) from bag time 12.000 s to 14.500 s skipped``, with
@@ -340,6 +347,7 @@ class Loss:
             span = "at unknown bag times"
         else:
             span = f"from bag time {_sec(self.start_ns)} s to {_sec(self.end_ns)} s"
+            span += " and at unknown bag times" if self.more_span else ""
         return f"{messages} ({size}) {span} skipped"
 
 
@@ -353,8 +361,11 @@ def _size_text(count: int) -> str:
 
 def total_loss(losses: Iterable[Loss], input: str = "") -> Loss:
     """All of ``losses`` as one: the known counts summed (``at least`` when some are unknown),
-    the span from the earliest known start to the latest known end."""
-    items = list(losses)
+    the span from the earliest known start to the latest known end. A loss of no message (a
+    damaged index read around) adds nothing unknown."""
+    items = [loss for loss in losses if not loss.nothing]
+    if not items:
+        return Loss(input=input, messages=0)
     messages = [loss.messages for loss in items if loss.messages is not None]
     sizes = [loss.bytes for loss in items if loss.bytes is not None]
     starts = [loss.start_ns for loss in items if loss.start_ns is not None]
@@ -367,6 +378,8 @@ def total_loss(losses: Iterable[Loss], input: str = "") -> Loss:
         end_ns=max(ends) if starts and ends else None,
         more_messages=bool(messages) and len(messages) < len(items),
         more_bytes=bool(sizes) and len(sizes) < len(items),
+        more_span=bool(starts and ends)
+        and not all(loss.start_ns is not None and loss.end_ns is not None for loss in items),
     )
 
 
