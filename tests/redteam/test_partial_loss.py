@@ -1,8 +1,9 @@
 """Red team, partial reads: a recording read only in part says how much was lost, everywhere.
 
 An MCAP with one corrupt chunk, one cut short, an sqlite3 bag with a damaged page and one cut
-short, a split bag missing a file, a ROS 1 bag with a corrupt chunk: each warning and the Result's losses give the messages,
-bytes and bag time the damage cost (or say it is unknown), checked against what was damaged.
+short, a split bag missing a file, a ROS 1 bag with a corrupt chunk: each warning and the
+Result's losses give the messages, bytes and bag time the damage cost (or say it is unknown),
+checked against what was damaged.
 The verdict of ``check``, ``fleet --budget``, ``sweep --budget`` and the pytest plugin stands;
 ``--strict`` fails them, in one line naming the input and the loss.
 """
@@ -19,7 +20,7 @@ import pytest
 import yaml
 
 from medkit_replay.checks.github import markdown
-from medkit_replay.model import Loss
+from medkit_replay.model import Loss, total_loss
 from medkit_replay.pipeline import replay
 from tests.checks.support import write_budget
 from tests.inputs.builders import chunks, diag, flipped, storage_file, truncated, write_bag
@@ -193,6 +194,25 @@ def test_a_corrupt_ros1_chunk_costs_what_its_index_says(tmp_path: Path) -> None:
         end_ns=lost_times[-1],
     )
     assert result.summary.messages_read == COUNT - len(lost_times)
+
+
+def test_a_total_says_what_it_cannot_know() -> None:
+    cut = Loss(bytes=80, start_ns=T0, end_ns=T0 + SECOND)
+    chunk = Loss(messages=5, bytes=191, start_ns=T0 + 2 * SECOND, end_ns=T0 + 3 * SECOND)
+    assert total_loss([Loss(), cut]).text() == (
+        "an unknown number of messages (at least 80 bytes) from bag time 100.000 s to "
+        "101.000 s and at unknown bag times skipped"
+    )
+    assert total_loss([cut, chunk]).text() == (
+        "at least 5 messages (271 bytes) from bag time 100.000 s to 103.000 s skipped"
+    )
+    assert total_loss([Loss(messages=0), chunk]) == chunk
+    assert total_loss([Loss(messages=0)]).text() == "no message lost"
+    assert total_loss([Loss()]).text() == "how much was lost is unknown"
+    assert (
+        Loss(messages=1, bytes=3_400_000).text()
+        == "1 message (3.4 MB) at unknown bag times skipped"
+    )
 
 
 # -- the commands --------------------------------------------------------------------------------
