@@ -175,7 +175,7 @@ class Rosbag1Input:
         try:
             yield from self._bag.scan()
         except Exception as exc:  # last resort: no reader failure may end the replay
-            self._warn(f"reading stopped ({type(exc).__name__}: {exc})")
+            self._warn(f"reading stopped ({type(exc).__name__}: {exc})", Loss())
 
     def _on_late(self, item: Timed[Raw1]) -> None:
         count, first = self._late
