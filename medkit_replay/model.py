@@ -11,7 +11,7 @@ from operator import attrgetter
 from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar, get_args
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterator
+    from collections.abc import Callable, Iterable, Iterator
 
 Origin = Literal[
     "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
@@ -297,6 +297,108 @@ class TopicSummary:
     type: str
     role: str | None
     messages: int
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Loss:
+    """Part of an input skipped as damaged, or the total of several: what it cost (None: unknown).
+
+    Attributes:
+        input: the input it belongs to, as given (empty in a total over several inputs).
+        messages: messages skipped; bytes: bytes of the file skipped.
+        start_ns, end_ns: the bag (log) time span the skipped part covered.
+        more_messages, more_bytes, more_span: a total to which losses of unknown size (or
+            unknown span) add more.
+    """
+
+    input: str = ""
+    messages: int | None = None
+    bytes: int | None = None
+    start_ns: int | None = None
+    end_ns: int | None = None
+    more_messages: bool = False
+    more_bytes: bool = False
+    more_span: bool = False
+
+    @property
+    def nothing(self) -> bool:
+        """Damage that cost no message (nothing else said of it)."""
+        return self.messages == 0 and self.bytes is None and self.start_ns is None
+
+    def text(self) -> str:
+        """``1,234 messages (3.4 MB) from bag time 12.000 s to 14.500 s skipped``, with
+        ``unknown`` (or ``at least``) where the reader could not tell."""
+        if self.bytes is None and (self.start_ns is None or self.end_ns is None):
+            if self.messages is None:
+                return "how much was lost is unknown"
+            if self.messages == 0 and not self.more_messages:
+                return "no message lost"
+        if self.messages is None:
+            messages = "an unknown number of messages"
+        else:
+            plural = "" if self.messages == 1 else "s"
+            least = "at least " if self.more_messages else ""
+            messages = f"{least}{self.messages:,} message{plural}"
+        if self.bytes is None:
+            size = "size unknown"
+        else:
+            size = ("at least " if self.more_bytes else "") + _size_text(self.bytes)
+        if self.start_ns is None or self.end_ns is None:
+            span = "at unknown bag times"
+        else:
+            span = f"from bag time {_sec(self.start_ns)} s to {_sec(self.end_ns)} s"
+            span += " and at unknown bag times" if self.more_span else ""
+        return f"{messages} ({size}) {span} skipped"
+
+
+def _sec(ns: int) -> str:
+    return f"{ns / NS_PER_SEC:.3f}"
+
+
+def _size_text(count: int) -> str:
+    return f"{count / 1e6:,.1f} MB" if count >= 100_000 else f"{count:,} bytes"
+
+
+def total_loss(losses: Iterable[Loss], input: str = "") -> Loss:
+    """All of ``losses`` as one: the known counts summed (``at least`` when some are unknown),
+    the span from the earliest known start to the latest known end. A loss of no message (a
+    damaged index read around) adds nothing unknown."""
+    items = [loss for loss in losses if not loss.nothing]
+    if not items:
+        return Loss(input=input, messages=0)
+    messages = [loss.messages for loss in items if loss.messages is not None]
+    sizes = [loss.bytes for loss in items if loss.bytes is not None]
+    starts = [loss.start_ns for loss in items if loss.start_ns is not None]
+    ends = [loss.end_ns for loss in items if loss.end_ns is not None]
+    return Loss(
+        input=input,
+        messages=sum(messages) if messages else None,
+        bytes=sum(sizes) if sizes else None,
+        start_ns=min(starts) if starts and ends else None,
+        end_ns=max(ends) if starts and ends else None,
+        more_messages=bool(messages) and len(messages) < len(items),
+        more_bytes=bool(sizes) and len(sizes) < len(items),
+        more_span=bool(starts and ends)
+        and not all(loss.start_ns is not None and loss.end_ns is not None for loss in items),
+    )
+
+
+def losses_by_input(losses: Iterable[Loss]) -> tuple[Loss, ...]:
+    """One total per input that lost anything, in the order their first loss was met."""
+    grouped: dict[str, list[Loss]] = {}
+    for loss in losses:
+        grouped.setdefault(loss.input, []).append(loss)
+    return tuple(total_loss(group, name) for name, group in grouped.items())
+
+
+def read_in_part(loss: Loss) -> str:
+    """One line saying what an input's damage cost, in total (``loss`` from losses_by_input)."""
+    return f"{loss.input}: read only in part: {loss.text()}"
+
+
+def strict_failure(loss: Loss) -> str:
+    """The one line with which ``--strict`` fails a recording read only in part."""
+    return f"{read_in_part(loss)} (--strict fails it)"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

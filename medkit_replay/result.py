@@ -20,6 +20,7 @@ if TYPE_CHECKING:
         FaultEvent,
         FaultSnapshot,
         InputSummary,
+        Loss,
         MutedFault,
         NearMiss,
         ReportRecord,
@@ -239,6 +240,13 @@ class Result:
     evidence_refused: tuple[str, ...] = ()
     """Clip folders left unwritten: the evidence folder held something else under their names
     (no clip was written then); not in the JSON report, which is the same either way."""
+    losses: tuple[Loss, ...] = ()
+    """What damage cost, one per damage warning (each also in ``warnings``, which say it); not
+    in the JSON report as a key of its own."""
+
+    def losses_by_input(self) -> tuple[Loss, ...]:
+        """What damage cost, in total per input that lost anything (in the order found)."""
+        return model.losses_by_input(self.losses)
 
     def span(self) -> tuple[int | None, int | None]:
         """The recording's first and last log time: its inputs' spans and the messages read."""

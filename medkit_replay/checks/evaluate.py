@@ -25,6 +25,7 @@ from medkit_replay.checks.budget import (
     seconds_text,
 )
 from medkit_replay.checks.facts import Facts, Offender
+from medkit_replay.model import strict_failure
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
@@ -32,6 +33,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.checks.budget import Budget, Rule
     from medkit_replay.checks.facts import FormedCluster
+    from medkit_replay.model import Loss
     from medkit_replay.result import Result
 
 RESOLVED = ("HEALED", "CLEARED")
@@ -61,11 +63,20 @@ class CheckRun:
     """Why the run was not checked (one line): its recording could not be replayed, or
     nothing in it reached the fault manager (``empty``); then it has no verdicts and fails."""
     empty: bool = False
+    losses: tuple[Loss, ...] = ()
+    """What damage cost, in total per input that lost anything (each also in ``warnings``)."""
+    strict: bool = False
+    """Damage fails the run (``--strict``)."""
 
     @property
     def passed(self) -> bool:
-        """The run was replayed and every rule held."""
-        return self.error is None and all(v.passed for v in self.verdicts)
+        """The run was replayed, every rule held and (under ``--strict``) nothing was lost."""
+        return self.error is None and not self.damage and all(v.passed for v in self.verdicts)
+
+    @property
+    def damage(self) -> tuple[str, ...]:
+        """Under ``--strict``, why damage fails the run: one line per input read in part."""
+        return tuple(strict_failure(loss) for loss in self.losses) if self.strict else ()
 
     @property
     def failures(self) -> tuple[Verdict, ...]:
@@ -73,9 +84,12 @@ class CheckRun:
         return tuple(v for v in self.verdicts if not v.passed)
 
 
-def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun:
-    """The budget's verdicts on a replay of ``inputs``, labelled for the outputs; a replay
-    that took nothing is a failed run saying what was missing (see :func:`nothing_replayed`)."""
+def check_run(
+    budget: Budget, result: Result, inputs: Sequence[str], *, strict: bool = False
+) -> CheckRun:
+    """The budget's verdicts on a replay of ``inputs``, labelled for the outputs (``strict``:
+    what damage cost fails the run); a replay that took nothing is a failed run saying what
+    was missing (see :func:`nothing_replayed`)."""
     label = " + ".join(inputs)
     empty = nothing_replayed(budget, result)
     if empty is not None:
@@ -87,6 +101,8 @@ def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun
             warnings=result.warnings,
             error=f"{label}: {empty}",
             empty=True,
+            losses=result.losses_by_input(),
+            strict=strict,
         )
     return CheckRun(
         label=label,
@@ -94,6 +110,8 @@ def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun
         budget=budget,
         verdicts=evaluate(budget, result),
         warnings=result.warnings,
+        losses=result.losses_by_input(),
+        strict=strict,
     )
 
 

@@ -14,6 +14,7 @@ import html
 import string
 from typing import TYPE_CHECKING
 
+from medkit_replay.model import read_in_part
 from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
@@ -74,6 +75,12 @@ def workflow_commands(runs: Sequence[CheckRun]) -> list[str]:
             title = escape_property(printable(f"fault budget exceeded: {rule.name} ({run.label})"))
             lines = [printable(line) for line in (verdict.message, *_offender_lines(verdict))]
             commands.append(f"::error {where},title={title}::{escape_data(chr(10).join(lines))}")
+        title = escape_property(printable(f"recording read only in part ({run.label})"))
+        for line in run.damage:
+            commands.append(f"::error title={title}::{escape_data(printable(line))}")
+        for loss in () if run.damage else run.losses:
+            line = printable(read_in_part(loss))
+            commands.append(f"::warning title={title}::{escape_data(line)}")
         for warning in run.warnings:
             title = escape_property(printable(f"medkit-replay warning ({run.label})"))
             shown = printable(clip(warning, WARNING_CAP))
@@ -96,6 +103,8 @@ def step_summary(runs: Sequence[CheckRun]) -> str:
     headline = "budget exceeded ❌"
     if unreadable or empty:
         headline = "a recording cannot be read ❌" if unreadable else "nothing replayed ❌"
+    elif not any(run.failures for run in runs):
+        headline = "a recording was read only in part (--strict) ❌"
     lines = ["## medkit-replay check: " + ("budget holds ✅" if held else headline), ""]
     if budget is not None:
         lines += [f"Budget: {markdown(budget.title)} ({markdown(budget.path)})", ""]
@@ -122,6 +131,10 @@ def step_summary(runs: Sequence[CheckRun]) -> str:
             mark = "✅ pass" if verdict.passed else "❌ **fail**"
             lines.append(f"| {mark} | {markdown(verdict.rule.name)} | {_cell(verdict)} |")
         lines.append("")
+        lost = [f"- ❌ {markdown(line)}" for line in run.damage] or [
+            f"- ⚠️ {markdown(read_in_part(loss))}" for loss in run.losses
+        ]
+        lines += [*lost, ""] if lost else []
         if run.warnings:
             lines += [f"- ⚠️ {markdown(clip(w, WARNING_CAP))}" for w in run.warnings]
             lines.append("")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING
 
+from medkit_replay.model import total_loss
 from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.text import xml_text
 from medkit_replay.version import __version__
@@ -27,6 +28,8 @@ UNREADABLE_CASE = "the recording can be read"
 """The testcase of a run whose recording could not be replayed."""
 EMPTY_CASE = "something was replayed"
 """The testcase of a run in which nothing reached the fault manager (``--allow-empty``: none)."""
+WHOLE_CASE = "the recording is read whole"
+"""The testcase ``--strict`` adds to each run: it fails when damage cost anything."""
 
 
 def failure_message(verdict: Verdict) -> str:
@@ -75,10 +78,49 @@ def _unreadable_case(suite: ET.Element, run: CheckRun, error: str) -> None:
     ET.SubElement(case, "error", {"message": xml_text(error), "type": kind}).text = xml_text(error)
 
 
+def _whole_case(suite: ET.Element, run: CheckRun) -> None:
+    case = ET.SubElement(
+        suite,
+        "testcase",
+        {"name": WHOLE_CASE, "classname": xml_text(run.label), "file": xml_text(run.inputs[0])},
+    )
+    if not run.damage:
+        ET.SubElement(case, "system-out").text = "nothing was lost to damage"
+        return
+    message = "; ".join(run.damage)
+    ET.SubElement(
+        case, "failure", {"message": xml_text(message), "type": "damage"}
+    ).text = xml_text("\n".join(run.damage))
+
+
+def _loss_properties(run: CheckRun) -> list[tuple[str, str]]:
+    """What damage cost the run, in total: messages, bytes, bag time span (ns), or unknown."""
+    if not run.losses:
+        return []
+    lost = total_loss(run.losses)
+
+    def amount(value: int | None, more: bool) -> str:
+        return "unknown" if value is None else ("at least " if more else "") + str(value)
+
+    span = "unknown"
+    if lost.start_ns is not None and lost.end_ns is not None:
+        span = f"{lost.start_ns}..{lost.end_ns}"
+    return [
+        ("medkit_replay.lost_messages", amount(lost.messages, lost.more_messages)),
+        ("medkit_replay.lost_bytes", amount(lost.bytes, lost.more_bytes)),
+        ("medkit_replay.lost_span_ns", span),
+    ]
+
+
+def _strict_case(run: CheckRun) -> int:
+    """1 when ``--strict`` adds its testcase to a replayed run, else 0."""
+    return int(run.strict and run.error is None)
+
+
 def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
     """The JUnit document of a check: its ``testsuites`` root element, indented."""
-    tests = sum(len(r.verdicts) if r.error is None else 1 for r in runs)
-    failures = sum(len(r.failures) for r in runs)
+    tests = sum(len(r.verdicts) + _strict_case(r) if r.error is None else 1 for r in runs)
+    failures = sum(len(r.failures) + bool(r.damage) for r in runs)
     errors = sum(1 for r in runs if r.error is not None)
     root = ET.Element(
         "testsuites",
@@ -95,8 +137,8 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
             "testsuite",
             {
                 "name": xml_text(run.label),
-                "tests": str(len(run.verdicts) if run.error is None else 1),
-                "failures": str(len(run.failures)),
+                "tests": str(len(run.verdicts) + _strict_case(run) if run.error is None else 1),
+                "failures": str(len(run.failures) + bool(run.damage)),
                 "errors": "0" if run.error is None else "1",
                 "skipped": "0",
             },
@@ -104,12 +146,15 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
         properties = ET.SubElement(suite, "properties")
         entries = [("budget", run.budget.path), ("medkit_replay_version", __version__)]
         entries += [("input", path) for path in run.inputs]
+        entries += _loss_properties(run)
         for name, value in entries:
             ET.SubElement(properties, "property", {"name": name, "value": xml_text(value)})
         if run.error is not None:
             _unreadable_case(suite, run, run.error)
         for verdict in run.verdicts:
             _testcase(suite, run, verdict)
+        if _strict_case(run):
+            _whole_case(suite, run)
         if run.warnings:
             ET.SubElement(suite, "system-err").text = xml_text("\n".join(run.warnings))
     ET.indent(root)

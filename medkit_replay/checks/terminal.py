@@ -13,6 +13,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
+from medkit_replay.model import read_in_part
 from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
@@ -69,11 +70,19 @@ def run_renderable(run: CheckRun) -> list[RenderableType]:
         head.append(f"{failed} of {_plural(len(run.verdicts), 'rule')} failed", style="bold red")
     else:
         head.append(f"all {_plural(len(run.verdicts), 'rule')} passed", style="bold green")
+    if run.damage:
+        head.append("; read only in part (--strict)", style="bold red")
     for verdict in run.verdicts:
         _verdict_rows(grid, verdict)
+    for line in run.damage:
+        grid.add_row(Text("FAIL", style="bold red"), Text(printable(line), style="red"))
     for warning in run.warnings:
         shown = printable(clip(warning, WARNING_CAP))
         grid.add_row(Text("!", style="bold yellow"), Text(shown, style="yellow"))
+    if not run.damage:
+        for loss in run.losses:
+            total = printable(read_in_part(loss))
+            grid.add_row(Text("!", style="bold yellow"), Text(total, style="bold yellow"))
     return [head, grid, Text("")]
 
 
@@ -101,9 +110,14 @@ def conclusion(runs: Sequence[CheckRun]) -> Text:
             style="bold green",
         )
     failures = sum(len(r.failures) for r in failed_runs)
+    over = [r for r in failed_runs if r.failures]
+    damaged = sum(1 for r in failed_runs if r.damage)
+    strict = f"{damaged} of {_plural(len(runs), 'run')} read only in part (--strict)"
+    if not over:
+        return Text(f"check failed: {strict}", style="bold red")
     return Text(
         f"budget exceeded: {_plural(failures, 'rule verdict')} failed in "
-        f"{len(failed_runs)} of {_plural(len(runs), 'run')}",
+        f"{len(over)} of {_plural(len(runs), 'run')}" + (f"; {strict}" if damaged else ""),
         style="bold red",
     )
 

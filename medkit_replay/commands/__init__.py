@@ -18,6 +18,8 @@ if TYPE_CHECKING:
 
     from click.decorators import FC
 
+    from medkit_replay.model import Loss
+
 CONFIG_HELP = "ROS 2 parameter file (repeatable; later files override earlier ones)."
 
 
@@ -109,3 +111,25 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
         return command
 
     return decorate
+
+
+STRICT_HELP = (
+    "Fail (exit 1) a recording read only in part: any message, byte or file lost to damage, "
+    "named in one line with what it cost (without it, damage is a warning)."
+)
+
+
+def strict_option() -> Callable[[FC], FC]:
+    """``--strict``: damage fails the check (``check``; ``fleet``, ``sweep`` with a budget)."""
+    return click.option("--strict", is_flag=True, help=STRICT_HELP)
+
+
+def say_damage(losses: Iterable[Loss]) -> bool:
+    """Print ``--strict``'s one line per recording read only in part (on standard error);
+    whether there was any."""
+    from medkit_replay.model import strict_failure  # noqa: PLC0415  # not for --help
+
+    lines = [strict_failure(loss) for loss in losses]
+    for line in lines:
+        click.echo(line, err=True)
+    return bool(lines)

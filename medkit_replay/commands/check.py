@@ -15,7 +15,13 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import allow_empty_option, config_option, input_argument, local_paths
+from medkit_replay.commands import (
+    allow_empty_option,
+    config_option,
+    input_argument,
+    local_paths,
+    strict_option,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
@@ -55,6 +61,7 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
     help="Print GitHub Actions annotations; append a summary to $GITHUB_STEP_SUMMARY if set.",
 )
 @allow_empty_option()
+@strict_option()
 @click.pass_context
 def check(
     ctx: click.Context,
@@ -65,14 +72,15 @@ def check(
     junit_out: Path | None,
     github: bool,
     allow_empty: bool,
+    strict: bool,
 ) -> None:
     """Replay each INPUT and check it against a fault budget.
 
     Each INPUT is its own run (one mission per recording) unless --merge is given. A run in
     which nothing reached the fault manager fails, whatever the rules (--allow-empty passes
     it). Exit status: 0 every rule holds on every run; 1 the budget is exceeded or a recording
-    cannot be read or replayed nothing; 2 bad usage, budget or config, or an INPUT that does
-    not exist.
+    cannot be read or replayed nothing (with --strict, also when one is read only in part); 2
+    bad usage, budget or config, or an INPUT that does not exist.
 
     \b
     Examples:
@@ -99,7 +107,7 @@ def check(
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
     for group in groups:
-        run = _check_group(budget, group, configs)
+        run = _check_group(budget, group, configs, strict=strict)
         runs.append(run)
         with standard_output("the check's results"):
             print_run(run, sys.stdout)
@@ -118,7 +126,9 @@ def check(
         ctx.exit(1)
 
 
-def _check_group(budget: Budget, group: list[Path | str], configs: tuple[Path, ...]) -> CheckRun:
+def _check_group(
+    budget: Budget, group: list[Path | str], configs: tuple[Path, ...], *, strict: bool = False
+) -> CheckRun:
     """Replay one run and check it; a recording that cannot be read is a failed run saying why
     (a config problem is still the whole command's, exit 2)."""
     from medkit_replay.checks.evaluate import check_run, unreadable_run  # noqa: PLC0415
@@ -133,7 +143,7 @@ def _check_group(budget: Budget, group: list[Path | str], configs: tuple[Path, .
         bar = progress_bar(sys.stderr)
         with bar if bar is not None else nullcontext():
             result = replay(group, configs, progress=bar)
-        return check_run(budget, result, labels)
+        return check_run(budget, result, labels, strict=strict)
     except ConfigError:
         raise
     except MedkitReplayError as err:

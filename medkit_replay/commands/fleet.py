@@ -20,6 +20,8 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    say_damage,
+    strict_option,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -51,6 +53,7 @@ DEFAULT_OUT = Path("fleet-report")
     help="Folder for runs.csv/.json, codes.csv/.json and index.html.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
+@strict_option()
 def fleet(
     input_dirs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
@@ -61,6 +64,7 @@ def fleet(
     timeout: float | None,
     out_dir: Path,
     quiet: bool,
+    strict: bool,
 ) -> None:
     """Replay every recording under INPUT_DIR... as its own run and compare the runs.
 
@@ -68,7 +72,8 @@ def fleet(
     A recording that cannot be replayed, times out or whose worker dies is reported in its
     row; the others still run. Exit status: 0 done, also when a recording cannot be read; 1 with
     --budget, when a run exceeds it, a recording cannot be read or replayed nothing (unless
-    --allow-empty); 2 bad usage, no recording found, an invalid config or budget.
+    --allow-empty), or (with --strict) was read only in part; 2 bad usage, no recording found,
+    an invalid config or budget.
 
     \b
     Examples:
@@ -86,6 +91,8 @@ def fleet(
 
     if dask_address is not None and jobs is not None:
         raise click.UsageError("--jobs and --dask cannot be used together")
+    if strict and budget is None:
+        raise click.UsageError("--strict fails runs of a budget check: give --budget too")
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
     config_paths = config_files(configs)  # a bad config stops the fleet before it starts
@@ -141,5 +148,7 @@ def fleet(
         with standard_output("the fleet summary"):
             print_summary(runs, sys.stdout, out_dir)
     failed = any(not run.ok or run.budget == "fail" for run in runs)
+    if strict and say_damage(run.lost for run in runs if run.lost is not None):
+        failed = True
     if parsed_budget is not None and failed:
         click.get_current_context().exit(1)

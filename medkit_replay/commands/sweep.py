@@ -19,6 +19,8 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    say_damage,
+    strict_option,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -67,6 +69,7 @@ from medkit_replay.outputs.console import warn
     "refused before it starts.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
+@strict_option()
 def sweep(
     inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
@@ -80,6 +83,7 @@ def sweep(
     html_path: Path | None,
     max_runs: int | None,
     quiet: bool,
+    strict: bool,
 ) -> None:
     """Replay INPUT... once per variant of a grid of settings and rank the variants.
 
@@ -88,7 +92,8 @@ def sweep(
     folder). Each input is read once per worker and bridge setting, its requests fed to every
     variant. Exit status: 0 done, also when an input cannot be read; 1 with --budget, when a
     variant is over budget on some input, an input cannot be read or replayed nothing (unless
-    --allow-empty); 2 bad usage, an invalid config or grid.
+    --allow-empty), or (with --strict) was read only in part; 2 bad usage, an invalid config
+    or grid.
 
     \b
     Examples:
@@ -116,6 +121,8 @@ def sweep(
 
     if dask_address is not None and jobs is not None:
         raise click.UsageError("--jobs and --dask cannot be used together")
+    if strict and budget is None:
+        raise click.UsageError("--strict fails inputs of a budget check: give --budget too")
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
     config_paths = config_files(configs)
@@ -196,6 +203,8 @@ def sweep(
             )
             print_summary(sys.stdout, parts)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
+    if strict and say_damage(outcome.lost):
+        over = True
     if parsed_budget is not None and over:
         click.get_current_context().exit(1)
 

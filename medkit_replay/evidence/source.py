@@ -22,6 +22,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Iterator
     from pathlib import Path
 
+    from medkit_replay.model import Loss
+
 _INT64_MAX = 2**63 - 1
 
 
@@ -57,6 +59,10 @@ class _File:
         raise NotImplementedError
 
 
+def _silent(text: str, loss: Loss | None = None, /) -> None:
+    """Says nothing: what opening a file finds, the replay has reported already."""
+
+
 class _McapFile(_File):
     """Read through the replay's MCAP reader (inputs.mcap): its bounds, its damage handling."""
 
@@ -64,8 +70,12 @@ class _McapFile(_File):
         self.path = path
         open_regular(path).close()  # a FIFO or device is refused, never waited on
         # What opening finds (a profile, a missing footer) the replay has reported already.
-        self.file = McapFile(path, 0, lambda _: None)
-        self.file.warn = note  # damage met in a window: a note of the evidence
+        self.file = McapFile(path, 0, _silent)
+
+        def noted(text: str, loss: Loss | None = None, /) -> None:
+            note(text)  # damage met in a window: a note of the evidence (the replay counted it)
+
+        self.file.warn = noted
         if not self.file.chunk_indexed:
             # Time windows are read through the chunk index only: a file without one would
             # be scanned whole for every capture.

@@ -16,6 +16,7 @@ from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
 from medkit_replay.inputs import is_remote
 from medkit_replay.inputs.recording import input_kind
+from medkit_replay.model import Loss, total_loss
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
 
@@ -56,6 +57,8 @@ class RunSummary:
         budget_failures: the names of the budget's rules that did not hold, in budget order;
             or one line saying what was missing when nothing was replayed.
         error: why the run failed (one line), None when it did not.
+        lost: what damage cost the recording, in total (None: nothing was lost); not a column
+            of the tables, ``--strict`` fails the fleet on it.
     """
 
     path: str
@@ -71,6 +74,7 @@ class RunSummary:
     budget: str | None = None
     budget_failures: tuple[str, ...] = ()
     error: str | None = None
+    lost: Loss | None = None
 
     @property
     def ok(self) -> bool:
@@ -142,6 +146,7 @@ def summarize(path: str, kind: str, result: Result) -> RunSummary:
         confirmed=tuple(first_confirmed.items()),
         heals=tuple(heals),
         warnings=len(result.warnings),
+        lost=total_loss(result.losses, path) if result.losses else None,
     )
 
 

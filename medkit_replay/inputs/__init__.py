@@ -9,9 +9,10 @@ ones (rosbags decodes the types they do not cover and big-endian payloads). Unco
 chunks are read through their message indexes. Any of these may be named by an ``s3://``,
 ``gs://`` or ``http(s)://`` URL instead (:mod:`medkit_replay.inputs.remote`, the ``remote``
 extra): an indexed MCAP is then fetched by ranges, other storage files through a temporary copy.
-Damage costs what it destroyed and is said in ``Recording.warnings``; an input of which nothing
-can be read raises :class:`~medkit_replay.errors.InputError`. A recording still being written is
-followed with ``open_recording(..., follow=Follow())``: its files are read as they grow and appear
+Damage costs what it destroyed and is said in ``Recording.warnings``, what it cost (messages,
+bytes, bag time, where known) in ``Recording.losses``; an input of which nothing can be read
+raises :class:`~medkit_replay.errors.InputError`. A recording still being written is followed
+with ``open_recording(..., follow=Follow())``: its files are read as they grow and appear
 (``tail.py``), never locked or changed, until it is finished or the :class:`Follow` stops.
 
     with open_recording(["run_bag/"], rosout=True) as recording:

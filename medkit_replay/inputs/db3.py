@@ -22,10 +22,13 @@ from medkit_replay.inputs.storage import (
     Raw,
     temp_room,
 )
+from medkit_replay.model import Loss
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
+
+    from medkit_replay.inputs.source import Warn
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
 MAX_TOPICS = 65_536
@@ -94,9 +97,7 @@ def _copy_prefix(source: Path, target: Path, size: int) -> None:
             size -= len(block)
 
 
-def checkpointed_copy(
-    path: Path, warn: Callable[[str], None]
-) -> tuple[TemporaryDirectory[str], Path] | None:
+def checkpointed_copy(path: Path, warn: Warn) -> tuple[TemporaryDirectory[str], Path] | None:
     """A temporary copy of ``path`` with its ``-wal`` applied, when the wal holds data.
 
     ``immutable`` would ignore the wal; applying it in place would write beside the recording.
@@ -106,13 +107,13 @@ def checkpointed_copy(
     journal = path.with_name(path.name + "-journal")
     try:
         if journal.is_file() and journal.stat().st_size:
-            warn(f"{path}: an unfinished transaction in {journal.name} is not read")
+            warn(f"{path}: an unfinished transaction in {journal.name} is not read", Loss())
         if not wal.exists():
             return None
         size = _committed_wal_bytes(wal)
         database = path.stat().st_size
     except (OSError, FileRefusedError) as exc:
-        warn(f"{path}: {wal.name} cannot be read ({exc}); its data is not read")
+        warn(f"{path}: {wal.name} cannot be read ({exc}); its data is not read", Loss())
         return None
     if not size:
         return None
@@ -120,7 +121,8 @@ def checkpointed_copy(
         warn(
             f"{path}: {wal.name} holds data not yet checkpointed, but applying it needs a "
             f"{database + size:,}-byte copy, more than the temporary folder has room for; "
-            "its data is not read"
+            "its data is not read",
+            Loss(bytes=size),
         )
         return None
     folder = TemporaryDirectory(prefix="medkit-replay-")
@@ -132,7 +134,9 @@ def checkpointed_copy(
             db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
     except (OSError, sqlite3.Error) as exc:
         folder.cleanup()
-        warn(f"{path}: {wal.name} cannot be applied ({exc}); its data is not read")
+        warn(
+            f"{path}: {wal.name} cannot be applied ({exc}); its data is not read", Loss(bytes=size)
+        )
         return None
     except BaseException:
         folder.cleanup()
@@ -181,7 +185,7 @@ class Db3File:
 
     storage = "sqlite3"
 
-    def __init__(self, path: Path, file_no: int, warn: Callable[[str], None]) -> None:
+    def __init__(self, path: Path, file_no: int, warn: Warn) -> None:
         self.path = path
         self.file_no = file_no
         self.warn = warn
@@ -190,6 +194,8 @@ class Db3File:
         self.start_ns: int | None = None
         self.end_ns: int | None = None
         self._counted = False
+        self._emitted = 0  # wanted messages read: what damage leaves of the rows counted
+        self._wanted_ids: set[int] = set()
         self._bad_times: dict[int, int] = {}
         self._copy: TemporaryDirectory[str] | None = None
         self._open(path)
@@ -245,10 +251,13 @@ class Db3File:
             self.counts.clear()
             self._bad_times.clear()
             self.start_ns = self.end_ns = None
-            self.warn(f"{self.path}: damaged database, messages cannot be counted ({exc})")
+            self.warn(f"{self.path}: damaged database, messages cannot be counted ({exc})", Loss())
             return
         if orphans:
-            self.warn(f"{self.path}: {_rows(orphans)} name no declared topic; not read")
+            self.warn(
+                f"{self.path}: {_rows(orphans)} name no declared topic; not read",
+                Loss(messages=orphans),
+            )
 
     def _read_topics(self, db: sqlite3.Connection) -> None:
         tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
@@ -316,6 +325,7 @@ class Db3File:
         if not wanted:
             return
         losses = {"data": _Losses(), "large": _Losses()}
+        self._wanted_ids = wanted
         try:
             with closing(
                 connect_read_only(self._source, immutable=True, limit=MESSAGE_SIZE_LIMIT)
@@ -323,22 +333,34 @@ class Db3File:
                 yield from self._messages(db, sorted(wanted), cap_ns, losses)
                 self._report_bad_times(db, wanted)
         except sqlite3.Error as exc:
-            self.warn(f"{self.path}: damaged database ({exc}); its messages are lost")
+            self.warn(f"{self.path}: damaged database ({exc})", self._rest_lost(None, losses))
         self._report_losses(losses)
+
+    def _rest_lost(self, after_ns: int | None, losses: dict[str, _Losses]) -> Loss:
+        """What stopping here costs: the wanted rows counted but neither read nor skipped
+        already (unknown when they could not be counted), after ``after_ns`` to the end."""
+        messages = None
+        if self._counted:
+            counted = sum(self.counts.get(cid, 0) for cid in self._wanted_ids)
+            messages = max(0, counted - self._emitted - sum(x.count for x in losses.values()))
+        start = after_ns if after_ns is not None and self.end_ns is not None else None
+        return Loss(messages=messages, start_ns=start, end_ns=self.end_ns if start else None)
 
     def _report_losses(self, losses: dict[str, _Losses]) -> None:
         """Warn about wanted rows skipped for their payload."""
         data, large = losses["data"], losses["large"]
         if data.count:
             self.warn(
-                f"{self.path}: {_rows(data.count)} without a binary payload skipped "
-                f"({_ids(data.ids, data.count)})"
+                f"{self.path}: {_rows(data.count)} without a binary payload "
+                f"({_ids(data.ids, data.count)})",
+                Loss(messages=data.count),
             )
         if large.count:
             shown = _ids(large.ids, large.count)
             self.warn(
                 f"{self.path}: {_rows(large.count)} with a payload that cannot be loaded "
-                f"within the {MESSAGE_SIZE_LIMIT:,}-byte limit skipped ({shown})"
+                f"within the {MESSAGE_SIZE_LIMIT:,}-byte limit ({shown})",
+                Loss(messages=large.count),
             )
 
     def _messages(
@@ -387,7 +409,8 @@ class Db3File:
                     found = None
                 if found is None or skips > MAX_TOO_LARGE:
                     self.warn(
-                        f"{self.path}: rows past the limit cannot be skipped; the rest is lost"
+                        f"{self.path}: rows past the limit cannot be skipped; the rest is lost",
+                        self._rest_lost(last[0] if last else None, losses),
                     )
                     return
                 if indexed:
@@ -403,7 +426,10 @@ class Db3File:
                     losses["large"].add(found[0])
             except sqlite3.DatabaseError as exc:
                 if not indexed:
-                    self.warn(f"{self.path}: damaged database ({exc}); the rest is lost")
+                    self.warn(
+                        f"{self.path}: damaged database ({exc}); the rest is lost",
+                        self._rest_lost(None, losses),
+                    )
                     return
                 after_text = f"after t={last[0]}" if last else "from the start"
                 self.warn(
@@ -428,6 +454,7 @@ class Db3File:
         if not isinstance(data, bytes):
             losses["data"].add(rowid)
             return
+        self._emitted += 1
         if not self._counted:
             self.counts[cid] = self.counts.get(cid, 0) + 1
             self.start_ns = t_ns if self.start_ns is None else min(self.start_ns, t_ns)
@@ -457,7 +484,10 @@ class Db3File:
         if not self._counted:
             count = found
         if count:
-            self.warn(f"{self.path}: {_rows(count)} skipped: {_TIME_RULE} ({_ids(ids, count)})")
+            self.warn(
+                f"{self.path}: {_rows(count)}: {_TIME_RULE} ({_ids(ids, count)})",
+                Loss(messages=count),
+            )
 
 
 def _after(last: tuple[int, int] | None, last_id: int | None) -> tuple[str, list[int]]:

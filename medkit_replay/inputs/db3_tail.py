@@ -25,11 +25,13 @@ from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError, Raw, temp_room
 from medkit_replay.inputs.wal import WalMirror, is_wal_mode
+from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
     from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection
     from medkit_replay.inputs.watch import Watched
 
@@ -53,7 +55,7 @@ class Db3Tail(Db3File):
         self,
         path: Path,
         file_no: int,
-        warn: Callable[[str], None],
+        warn: Warn,
         *,
         follow: Follow,
         done: Callable[[], bool],
@@ -95,6 +97,7 @@ class Db3Tail(Db3File):
         mirror = WalMirror(self.path, Path(self._copy.name))
         cap = cap_ns if cap_ns is not None else 2**63
         wanted: set[int] = set()
+        self._wanted_ids = wanted  # as it grows: what damage costs is counted over it
         classified: set[int] = set()
         losses = {"data": _Losses(), "large": _Losses()}
         last_id = 0
@@ -123,7 +126,7 @@ class Db3Tail(Db3File):
             self._finish(source, wanted, losses)
             raise
         except sqlite3.Error as exc:
-            self.warn(f"{self.path}: damaged database ({exc}); its messages are lost")
+            self.warn(f"{self.path}: damaged database ({exc})", self._rest_lost(None, losses))
         self._finish(source, wanted, losses)
 
     def _snapshot(self, mirror: WalMirror, done: bool) -> Path | None:
@@ -231,5 +234,7 @@ class Db3Tail(Db3File):
                     self._probe(db)
                     self._report_bad_times(db, wanted)
             except (sqlite3.Error, NotABagError) as exc:
-                self.warn(f"{self.path}: damaged database ({exc}); its messages cannot be counted")
+                self.warn(
+                    f"{self.path}: damaged database ({exc}); its messages cannot be counted", Loss()
+                )
         self._report_losses(losses)

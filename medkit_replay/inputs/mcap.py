@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from binascii import crc32
 from bisect import bisect_left
+from dataclasses import replace
 from operator import itemgetter
 from struct import Struct
 from typing import TYPE_CHECKING, BinaryIO
@@ -26,12 +27,14 @@ from medkit_replay.inputs.mcap_plan import (
     ChunkIndex,
     Plan,
     ReadAhead,
+    indexed_count,
     plan_chunk,
 )
 from medkit_replay.inputs.mcap_window import merge_window, window_chunks
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
+from medkit_replay.model import Loss
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
@@ -39,6 +42,7 @@ if TYPE_CHECKING:
     from pathlib import Path
 
     from medkit_replay.inputs.ranges import ByteSource, RangeReader
+    from medkit_replay.inputs.source import Warn
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = (
@@ -130,7 +134,7 @@ class McapFile:
         self,
         path: Path,
         file_no: int,
-        warn: Callable[[str], None],
+        warn: Warn,
         *,
         indexed: bool = True,
         source: ByteSource | None = None,
@@ -185,7 +189,13 @@ class McapFile:
             self.counts.clear()
             self.start_ns = self.end_ns = None
             if problem:
-                self.warn(f"{self.path}: {problem}; scanning the file from the start")
+                self.summary_problem(problem)
+
+    def summary_problem(self, problem: str) -> None:
+        """Say why the summary cannot be used: the messages are still scanned, so a damaged
+        summary costs none; a missing footer means a file cut short, which costs unknown."""
+        loss = Loss() if problem == NO_FOOTER else Loss(messages=0)
+        self.warn(f"{self.path}: {problem}; scanning the file from the start", loss)
 
     def _read_footer_and_summary(self, reader: RangeReader) -> str | None:
         footer_pos = self._size - FOOTER_SIZE
@@ -297,8 +307,8 @@ class McapFile:
                 yield from self._read_linear(bio, cap)
         if self._unknown_channels:
             self.warn(
-                f"{self.path}: {self._unknown_channels} messages refer to channels the file never "
-                "declares; skipped"
+                f"{self.path}: messages refer to channels the file never declares",
+                Loss(messages=self._unknown_channels),
             )
 
     def _wants(self, cid: int) -> bool:
@@ -349,11 +359,27 @@ class McapFile:
             or length > min(RECORD_SIZE_LIMIT, self._size - chunk.offset - 9)
         ):
             self.warn(
-                f"{self.path}: the chunk index points to no valid chunk at byte "
-                f"{chunk.offset}; messages from t={chunk.start_ns} in it are lost"
+                f"{self.path}: the chunk index points to no valid chunk at byte {chunk.offset}",
+                self._chunk_loss(reader, chunk),
             )
             return None
         return head
+
+    def _chunk_loss(
+        self, reader: RangeReader, chunk: ChunkIndex, kept: int = 0, size: int | None = None
+    ) -> Loss:
+        """What losing an indexed chunk (but ``kept`` of its messages) costs: the messages its
+        message index lists, its bytes (or ``size``), the span the chunk index gives it."""
+        listed = None
+        if chunk.index_length and chunk.offset + chunk.length + chunk.index_length <= self._size:
+            index = reader.read(chunk.offset + chunk.length, chunk.index_length)
+            listed = indexed_count(chunk, index)
+        return Loss(
+            messages=listed - kept if listed is not None and listed >= kept else None,
+            bytes=chunk.length if size is None else size,
+            start_ns=chunk.start_ns,
+            end_ns=chunk.end_ns if chunk.end_ns < LOG_TIME_LIMIT else None,
+        )
 
     def _chunk_messages(
         self, reader: RangeReader, chunk: ChunkIndex, head: bytes, plan: Plan | None
@@ -365,7 +391,8 @@ class McapFile:
             timed = self._by_index(reader, chunk, head, plan)
         if timed is None:
             body = self._read_into_buffer(reader, chunk.offset + 9, chunk.length - 9)
-            for batch in self._chunk(body, chunk.offset, LOG_TIME_LIMIT, count=False):
+            indexed = (reader, chunk)
+            for batch in self._chunk(body, chunk.offset, LOG_TIME_LIMIT, False, indexed=indexed):
                 if isinstance(batch, list):
                     return batch
             return []
@@ -533,12 +560,16 @@ class McapFile:
                 return
             body_end = pos + 9 + length
             if op == OP_MESSAGE and length < MESSAGE_HEADER:
-                self.warn(f"{self.path}: invalid message record at byte {pos}; the rest is lost")
+                self.warn(
+                    f"{self.path}: invalid message record at byte {pos}; the rest is lost",
+                    Loss(bytes=self._size - pos),
+                )
                 return
             if op == 0 or length > RECORD_SIZE_LIMIT:
                 self.warn(
                     f"{self.path}: invalid record (opcode {op:#04x}, {length} bytes) at byte "
-                    f"{pos}; the last {self._size - pos} bytes are lost"
+                    f"{pos}; the last {self._size - pos} bytes are lost",
+                    Loss(bytes=self._size - pos),
                 )
                 return
             if body_end > end:
@@ -546,11 +577,12 @@ class McapFile:
                 end = self._data_end
                 bio.seek(pos + 9)
             if body_end > end:
+                span = None
                 if op == OP_CHUNK and end - pos - 9 > 0:
-                    yield from self._chunk(
-                        memoryview(bio.read(end - pos - 9)), pos, cap, count=True, partial=True
-                    )
-                self._truncated(pos, f"a record (opcode {op:#04x}) of {length} bytes")
+                    body = memoryview(bio.read(end - pos - 9))
+                    yield from self._chunk(body, pos, cap, count=True, partial=True)
+                    span = _chunk_span(body)
+                self._truncated(pos, f"a record (opcode {op:#04x}) of {length} bytes", span)
                 return
             if op == OP_MESSAGE:
                 fixed = bio.read(MESSAGE_HEADER)
@@ -574,7 +606,10 @@ class McapFile:
                 try:
                     self._parse_records(bio.read(length), op)
                 except _DamageError as exc:
-                    self.warn(f"{self.path}: damaged schema or channel at byte {pos}: {exc}")
+                    self.warn(
+                        f"{self.path}: damaged schema or channel at byte {pos}: {exc}",
+                        Loss(messages=0, bytes=9 + length),  # its messages: unknown channels
+                    )
             pos = body_end
             bio.seek(pos)
 
@@ -589,17 +624,21 @@ class McapFile:
         else:
             self._add_channel(_Cursor(body))
 
-    def _truncated(self, pos: int, what: str) -> None:
+    def _truncated(self, pos: int, what: str, span: tuple[int, int] | None = None) -> None:
+        """Say the file ends inside a record: its bytes from ``pos`` are lost (a chunk cut off
+        gives the ``span`` of its messages; how many of them are lost is unknown)."""
+        start_ns, end_ns = span if span is not None else (None, None)
         self.warn(
             f"{self.path}: file ends inside {what} at byte {pos} of {self._size} (truncated: "
-            f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost"
+            f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost",
+            Loss(bytes=self._size - pos, start_ns=start_ns, end_ns=end_ns),
         )
 
     def _late_message(self, where: str, count: int, t_ns: int) -> None:
         what = "a log time" if count == 1 else f"{count} messages with log times"
         self.warn(
-            f"{where}: {what} at or after 2^63 ns ({t_ns}), which ROS 2 cannot record; "
-            "damaged, skipped"
+            f"{where}: {what} at or after 2^63 ns ({t_ns}), which ROS 2 cannot record; damaged",
+            Loss(messages=count),
         )
 
     def _count(self, cid: int, t_ns: int) -> None:
@@ -610,9 +649,16 @@ class McapFile:
             self._unknown_channels += 1
 
     def _chunk(
-        self, body: memoryview, pos: int, cap: int, count: bool, partial: bool = False
+        self,
+        body: memoryview,
+        pos: int,
+        cap: int,
+        count: bool,
+        partial: bool = False,
+        indexed: tuple[RangeReader, ChunkIndex] | None = None,
     ) -> Iterator[Bound | Timed[Raw] | list[Timed[Raw]]]:
-        """Decompress one chunk and yield its wanted messages sorted by (log time, offset)."""
+        """Decompress one chunk and yield its wanted messages sorted by (log time, offset);
+        ``indexed``: read through the chunk index, which says what a damaged chunk lost."""
         where = f"{self.path}: chunk at byte {pos}"
         try:
             cur = _Cursor(body)
@@ -620,14 +666,17 @@ class McapFile:
             compression, compressed = cur.string(), cur.uint(8)
             data = cur.rest() if partial else cur.take(compressed)
         except _DamageError as exc:
-            self.warn(f"{where}: header damaged ({exc}); its messages are lost")
+            self.warn(f"{where}: header damaged ({exc})", self._lost_chunk(body, indexed))
             return
         span = f"log times {start_ns}..{end_ns}"
-        if partial and compression:
+        if partial and compression:  # what it cost is said with the cut
             self.warn(f"{where} ({span}) is cut off and {compression}-compressed; it is lost")
             return
         if size > RECORD_SIZE_LIMIT:
-            self.warn(f"{where} ({span}) claims {size} bytes uncompressed; skipped as damaged")
+            self.warn(
+                f"{where} ({span}) claims {size} bytes uncompressed: damaged",
+                self._lost_chunk(body, indexed),
+            )
             return
         if partial or (not compression and len(data) == size and not crc):
             records = data  # what decompressing would give, without copying it
@@ -635,7 +684,10 @@ class McapFile:
             try:
                 records = memoryview(decompress_chunk(bytes(data), compression, size, crc))
             except ChunkDamageError as exc:
-                self.warn(f"{where} ({span}) cannot be decompressed: {exc}; its messages are lost")
+                self.warn(
+                    f"{where} ({span}) cannot be decompressed: {exc}",
+                    self._lost_chunk(body, indexed),
+                )
                 return
         fast = None if partial else self._plain_records(records, pos, count)
         timed, problem, late = (
@@ -648,9 +700,15 @@ class McapFile:
                 late_count,
                 late_t_ns,
             )
-        if problem or partial:
-            what = "cut off" if partial else problem
-            self.warn(f"{where} ({span}): {what}; kept {len(timed)} messages")
+        if partial:  # what it cost is said with the cut
+            self.warn(f"{where} ({span}): cut off; kept {len(timed)} messages")
+        elif problem is not None:
+            text, stop, walked = problem
+            loss = self._lost_chunk(body, indexed, walked)
+            rest = len(records) - stop if not compression else None  # of the file's bytes
+            self.warn(
+                f"{where} ({span}): {text}; kept {len(timed)} messages", replace(loss, bytes=rest)
+            )
         timed.sort(key=_ORDER)
         if timed:
             yield Bound(min(timed[0].t_ns, cap))
@@ -710,13 +768,15 @@ class McapFile:
 
     def _chunk_records(
         self, records: memoryview, pos: int, count: bool
-    ) -> tuple[list[Timed[Raw]], str | None, tuple[int, int, int] | None]:
+    ) -> tuple[list[Timed[Raw]], tuple[str, int, int] | None, tuple[int, int, int] | None]:
         """Every record of a chunk, carefully: its wanted messages, the damage that ended the
-        walk (if any), and messages skipped for log times past int64 (count, first offset, time).
+        walk (if any: what, where in the records, how many messages were walked before it),
+        and messages skipped for log times past int64 (count, first offset, time).
         """
         timed: list[Timed[Raw]] = []
         late: tuple[int, int, int] | None = None
         cur = _Cursor(records)
+        walked = inner = 0
         try:
             while cur.pos < len(records):
                 inner = cur.pos
@@ -724,11 +784,12 @@ class McapFile:
                 if op == 0:  # reserved opcode: zero-filled or overwritten bytes, not records
                     lost = len(records) - inner
                     problem = f"invalid opcode 0x00 at byte {inner} of its records ({lost} bytes)"
-                    return timed, problem, late
+                    return timed, (problem, inner, walked), late
                 record = _Cursor(cur.take(cur.uint(8)))
                 if op == OP_MESSAGE:
                     cid, _, t_ns = record.uint(2), record.uint(4), record.uint(8)
                     record.uint(8)
+                    walked += 1
                     if t_ns >= LOG_TIME_LIMIT:
                         late = (1, inner, t_ns) if late is None else (late[0] + 1, late[1], late[2])
                         continue
@@ -740,5 +801,23 @@ class McapFile:
                 elif op in (OP_SCHEMA, OP_CHANNEL):
                     self._parse_records(bytes(record.rest()), op)
         except _DamageError as exc:
-            return timed, f"damaged record inside ({exc})", late
+            return timed, (f"damaged record inside ({exc})", inner, walked), late
         return timed, None, late
+
+    def _lost_chunk(
+        self, body: memoryview, indexed: tuple[RangeReader, ChunkIndex] | None, kept: int = 0
+    ) -> Loss:
+        """What losing a chunk (but ``kept`` of its messages) costs: as its chunk index and
+        message index say, or (found by scanning) its bytes and the span its header gives."""
+        if indexed is not None:
+            return self._chunk_loss(*indexed, kept)
+        start_ns, end_ns = _chunk_span(body) or (None, None)
+        return Loss(bytes=9 + len(body), start_ns=start_ns, end_ns=end_ns)
+
+
+def _chunk_span(body: memoryview) -> tuple[int, int] | None:
+    """The log time span a chunk record's header gives (None: cut before it, or past int64)."""
+    if len(body) < 16:
+        return None
+    start_ns, end_ns = int.from_bytes(body[:8], "little"), int.from_bytes(body[8:16], "little")
+    return (start_ns, end_ns) if start_ns <= end_ns < LOG_TIME_LIMIT else None

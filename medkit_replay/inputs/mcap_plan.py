@@ -115,6 +115,25 @@ def plan_chunk(
     )
 
 
+def indexed_count(chunk: ChunkIndex, index: bytes) -> int | None:
+    """How many messages a chunk's message index records list (what a damaged chunk lost);
+    None when they are not what the chunk index says they are."""
+    count, at, total = 0, 0, len(index)
+    while at < total:
+        if at + _INDEX_HEAD.size > total:
+            return None
+        op, record_length, _, entries_length = _INDEX_HEAD.unpack_from(index, at)
+        if (
+            op != OP_MESSAGE_INDEX
+            or record_length != 6 + entries_length
+            or entries_length % _INDEX_ENTRY.size
+        ):
+            return None
+        count += entries_length // _INDEX_ENTRY.size
+        at += 9 + record_length
+    return count if at == total == chunk.index_length and total else None
+
+
 def _pieces(
     starts: list[int], ends: list[int], flags: list[bool], size: int
 ) -> list[tuple[int, int]]:

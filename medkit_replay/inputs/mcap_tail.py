@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.merge import Bound, Timed
     from medkit_replay.inputs.ranges import RangeReader
+    from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection, Raw
     from medkit_replay.inputs.watch import Watched
 
@@ -44,7 +45,7 @@ class McapTail(McapFile):
         self,
         path: Path,
         file_no: int,
-        warn: Callable[[str], None],
+        warn: Warn,
         *,
         follow: Follow,
         done: Callable[[], bool],
@@ -113,7 +114,7 @@ class McapTail(McapFile):
                     if self._chunks is None:  # read without an index, as analyze would
                         self.counts, self.start_ns, self.end_ns = counted
                         if problem:
-                            self.warn(f"{self.path}: {problem}; scanning the file from the start")
+                            self.summary_problem(problem)
                     return
             self._follow.wait()
 
@@ -129,7 +130,7 @@ class McapTail(McapFile):
             if moved_on:
                 if not self._unfinished:  # said as a finished file without its end says it
                     self._unfinished = True
-                    self.warn(f"{self.path}: {NO_FOOTER}; scanning the file from the start")
+                    self.summary_problem(NO_FOOTER)
                 return False
             self._follow.wait()
 

@@ -6,6 +6,7 @@ opened and closed.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -16,7 +17,7 @@ from medkit_replay.inputs.merge import merge
 from medkit_replay.inputs.rosbag2 import open_directory, open_file
 from medkit_replay.inputs.script import open_script_input
 from medkit_replay.inputs.selection import Selection
-from medkit_replay.inputs.source import InputContext
+from medkit_replay.inputs.source import InputContext, Warn
 from medkit_replay.inputs.tail import open_tail
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
-    from medkit_replay.model import InputSummary
+    from medkit_replay.model import InputSummary, Loss
 
 
 def open_bag1(path: Path, ctx: InputContext) -> Input:
@@ -63,11 +64,13 @@ class Recording:
 
     Attributes:
         warnings: what the user should know, in the order found (losses, skipped topics...).
+        losses: what damage cost, one entry per damage warning, in the same order.
     """
 
-    def __init__(self, inputs: list[Input], warnings: list[str]) -> None:
+    def __init__(self, inputs: list[Input], warnings: list[str], losses: list[Loss]) -> None:
         self._inputs = inputs
         self.warnings = warnings
+        self.losses = losses
         self._used = False
 
     def messages(self) -> Iterator[Message]:
@@ -192,15 +195,22 @@ def open_recording(
         only_roles=frozenset(only_roles) if only_roles is not None else None,
     )
     warnings: list[str] = []
+    losses: list[Loss] = []
 
-    def sink(text: str) -> None:
-        warnings.append(" ".join(text.splitlines()))  # one line each, whatever a file contained
+    def sink(name: str) -> Warn:
+        def warn(text: str, loss: Loss | None = None, /) -> None:
+            if loss is not None:
+                losses.append(replace(loss, input=name))
+                text = f"{text}; {loss.text()}"
+            warnings.append(" ".join(text.splitlines()))  # one line each, whatever a file held
+
+        return warn
 
     inputs: list[Input] = []
     try:
         for index, raw_path in enumerate(paths):
             if is_remote(raw_path):
-                context = InputContext(index, selection, sink, use_index=use_index)
+                context = InputContext(index, selection, sink(str(raw_path)), use_index=use_index)
                 # The remote reader (threads, the optional store client) loads with a URL only.
                 from medkit_replay.inputs.remote import open_remote  # noqa: PLC0415
 
@@ -220,7 +230,7 @@ def open_recording(
                     f"unsupported input (expected a rosbag2 directory or a {kinds} file)",
                     path=str(path),
                 )
-            context = InputContext(index, selection, sink, use_index=use_index)
+            context = InputContext(index, selection, sink(str(path)), use_index=use_index)
             try:
                 inputs.append(opener(path, context))
             except OSError as exc:
@@ -233,4 +243,4 @@ def open_recording(
         for opened in inputs:
             opened.close()
         raise
-    return Recording(inputs, warnings)
+    return Recording(inputs, warnings, losses)

@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.remote_store import Location
     from medkit_replay.inputs.source import InputContext
     from medkit_replay.inputs.storage import StorageFile
-    from medkit_replay.model import InputSummary
+    from medkit_replay.model import InputSummary, Loss
 
 BATCHES = 4
 """Batches of range requests in flight at once for one file (each sends its requests
@@ -345,7 +345,11 @@ def open_remote(text: str, ctx: InputContext, tallies: dict[str, Tally] | None =
     tally = (tallies if tallies is not None else {}).setdefault(name, Tally(name))
     folder = RemoteFolder(location, store, tally, single=single)
     warn = ctx.warn
-    ctx = ctx._replace(warn=lambda message: warn(folder.translate(message)))
+
+    def translated(message: str, loss: Loss | None = None, /) -> None:
+        warn(folder.translate(message), loss)
+
+    ctx = ctx._replace(warn=translated)
     try:
         if single:
             return RemoteBag(folder.mirror, ctx, [folder.mirror], _Metadata(), remote=folder)

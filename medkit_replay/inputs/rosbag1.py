@@ -12,9 +12,10 @@ from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.ros1_decoders import DECODERS
 from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore, standard_md5
 from medkit_replay.inputs.rosbag1_file import Bag1File
+from medkit_replay.inputs.skipped import report_skipped
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import NotABagError
-from medkit_replay.model import InputSummary, TopicSummary
+from medkit_replay.model import InputSummary, Loss, TopicSummary
 from medkit_replay.msgdefs import normalize_typename
 
 if TYPE_CHECKING:
@@ -61,7 +62,7 @@ class Rosbag1Input:
         self.ctx = ctx
         self._readers: dict[int, _Reader | None] = {}
         self._warned: set[str] = set()
-        self._failures: dict[str, tuple[int, int, str]] = {}
+        self._failures: dict[str, tuple[int, int, int, str]] = {}
         self._late: tuple[int, int] = (0, 0)
         self._used = False
         try:
@@ -74,11 +75,11 @@ class Rosbag1Input:
         except NotABagError as exc:
             raise InputError(str(exc), path=str(path)) from None
 
-    def _warn(self, text: str) -> None:
+    def _warn(self, text: str, loss: Loss | None = None, /) -> None:
         text = f"{self.path}: {text}"
         if text not in self._warned:
             self._warned.add(text)
-            self.ctx.warn(text)
+            self.ctx.warn(text, loss)
 
     def _reader(self, cid: int) -> _Reader | None:
         """How a connection is replayed, decided when its first message is met (None: not read)."""
@@ -174,7 +175,7 @@ class Rosbag1Input:
         try:
             yield from self._bag.scan()
         except Exception as exc:  # last resort: no reader failure may end the replay
-            self._warn(f"reading stopped ({type(exc).__name__}: {exc})")
+            self._warn(f"reading stopped ({type(exc).__name__}: {exc})", Loss())
 
     def _on_late(self, item: Timed[Raw1]) -> None:
         count, first = self._late
@@ -182,25 +183,19 @@ class Rosbag1Input:
 
     def _failed(self, topic: str, t_ns: int, exc: Exception) -> None:
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        count, first, why = self._failures.get(topic, (0, t_ns, reason))
-        self._failures[topic] = (count + 1, first, why)
+        count, first, _, why = self._failures.get(topic, (0, t_ns, t_ns, reason))
+        self._failures[topic] = (count + 1, first, t_ns, why)
 
     def _report_losses(self) -> None:
-        for topic, (count, first, reason) in sorted(self._failures.items()):
+        orphans = self._bag.orphans
+        report_skipped(self._warn, self._failures, (0, 0))  # the order of old: orphans between
+        if orphans:
             self._warn(
-                f"{count} messages on {topic} cannot be decoded and were skipped "
-                f"(first at t={first}: {reason})"
+                f"{orphans} messages belong to connections whose records are lost "
+                "(kept only in the missing index?); they cannot be decoded",
+                Loss(messages=orphans),
             )
-        if self._bag.orphans:
-            self._warn(
-                f"{self._bag.orphans} messages belong to connections whose records are lost "
-                "(kept only in the missing index?); they cannot be decoded"
-            )
-        if self._late[0]:
-            self._warn(
-                f"{self._late[0]} messages are stored too far out of time order to be "
-                f"replayed in order and were skipped (first at t={self._late[1]})"
-            )
+        report_skipped(self._warn, {}, self._late)
 
     # -- summary -------------------------------------------------------------------------------
 

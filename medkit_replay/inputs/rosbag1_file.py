@@ -16,12 +16,17 @@ from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.rosbag1_records import RecordDamageError
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
+from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
     from pathlib import Path
     from typing import IO
 
+    from medkit_replay.inputs.source import Warn
+
+_SCANNED = Loss(messages=0)
+"""What an unusable index costs: nothing, its chunks are scanned instead."""
 INDEX_SIZE_LIMIT = 256 * 1024 * 1024
 """Largest index section (connections and chunk infos) read into memory; larger is damage."""
 _CODECS = {"none": "", "bz2": "bz2", "lz4": "lz4"}
@@ -46,7 +51,7 @@ class Bag1File:
     def __init__(
         self,
         path: Path,
-        warn: Callable[[str], None],
+        warn: Warn,
         wants: Callable[[int], bool],
         *,
         indexed: bool = True,
@@ -112,12 +117,14 @@ class Bag1File:
         if header.index_pos == 0:
             self.warn(
                 "not indexed (the recorder stopped before writing its index?); "
-                "its chunks are scanned"
+                "its chunks are scanned",
+                Loss(),  # a recording cut short: how much is unknown
             )
         elif not data_end <= header.index_pos < self._size:
             self.warn(
                 f"index at byte {header.index_pos} is beyond the end of the file "
-                f"({self._size} bytes: truncated?); its chunks are scanned"
+                f"({self._size} bytes: truncated?); its chunks are scanned",
+                Loss(),
             )
         else:
             self._data_end = header.index_pos
@@ -152,7 +159,7 @@ class Bag1File:
         """Connections and chunk infos from the index; a damaged index is set aside with a note."""
         length = self._size - header.index_pos
         if length > INDEX_SIZE_LIMIT:
-            self.warn(f"index of {length} bytes is implausible; its chunks are scanned")
+            self.warn(f"index of {length} bytes is implausible; its chunks are scanned", _SCANNED)
             return
         chunks: list[rec.ChunkInfo] = []
         connections = 0
@@ -164,17 +171,18 @@ class Bag1File:
                 elif op == rec.OP_CHUNK_INFO:
                     chunks.append(rec.chunk_info(fields, data))
         except RecordDamageError as exc:
-            self.warn(f"index is damaged ({exc}); its chunks are scanned")
+            self.warn(f"index is damaged ({exc}); its chunks are scanned", _SCANNED)
             return
         if (connections, len(chunks)) != (header.conn_count, header.chunk_count):
             self.warn(
                 f"index holds {connections} connections and {len(chunks)} chunks, the bag "
                 f"header declares {header.conn_count} and {header.chunk_count}; "
-                "its chunks are scanned"
+                "its chunks are scanned",
+                _SCANNED,
             )
             return
         if any(not self._data_start <= c.chunk_pos < self._data_end for c in chunks):
-            self.warn("index points outside the bag's data; its chunks are scanned")
+            self.warn("index points outside the bag's data; its chunks are scanned", _SCANNED)
             return
         self._chunks = {c.chunk_pos: c for c in chunks}
         for chunk in chunks:
@@ -217,19 +225,24 @@ class Bag1File:
             except EOFError:
                 self.warn(
                     f"file ends inside a record at byte {pos} of {self._size} (truncated: "
-                    f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost"
+                    f"recorder stopped mid-write?); the last {self._size - pos} bytes are lost",
+                    self._lost(pos, self._size - pos, chunks=False),
                 )
                 yield from self._cut_chunk(pos)
                 return
             except RecordDamageError as exc:
                 later = [p for p in positions if p > pos]
                 if later:
-                    self.warn(f"damaged record at byte {pos} ({exc}); resumed at byte {later[0]}")
+                    self.warn(
+                        f"damaged record at byte {pos} ({exc}); resumed at byte {later[0]}",
+                        self._lost(pos, later[0] - pos),
+                    )
                     pos = later[0]
                     continue
                 self.warn(
                     f"damaged record at byte {pos} ({exc}); the last {self._data_end - pos} "
-                    "bytes are not read"
+                    "bytes are not read",
+                    self._lost(pos, self._data_end - pos),
                 )
                 return
             if op == rec.OP_CHUNK:
@@ -349,17 +362,18 @@ class Bag1File:
         """One chunk's wanted messages, sorted by (log time, position)."""
         where = f"chunk at byte {pos}"
         codec = _CODECS.get(compression)
+        lost = self._lost(pos, end - pos)
         if codec is None:
-            self.warn(f"{where}: compression {compression!r} is not supported; it is lost")
+            self.warn(f"{where}: compression {compression!r} is not supported; it is lost", lost)
             return []
         if size > RECORD_SIZE_LIMIT:
-            self.warn(f"{where} claims {size} bytes uncompressed; skipped as damaged")
+            self.warn(f"{where} claims {size} bytes uncompressed: damaged", lost)
             return []
         try:
             compressed = self._read_at(start, end - start)
             records = memoryview(decompress_chunk(compressed, codec, size, 0))
         except ChunkDamageError as exc:
-            self.warn(f"{where} cannot be decompressed: {exc}; its messages are lost")
+            self.warn(f"{where} cannot be decompressed: {exc}", lost)
             return []
         return self._messages_of(where, pos, records)
 
@@ -387,9 +401,26 @@ class Bag1File:
                         payload = bytes(records[record.data_start : record.data_end])
                         batch.append(Timed(t_ns, (pos, record.data_start), Raw1(cid, payload)))
         except RecordDamageError as exc:
-            self.warn(f"{where}: {exc}; the {kept} messages before it are kept")
+            lost = self._lost(pos, None, kept)
+            self.warn(f"{where}: {exc}; the {kept} messages before it are kept", lost)
         batch.sort(key=lambda timed: (timed.t_ns, timed.position))
         return batch
+
+    def _lost(self, pos: int, size: int | None, kept: int = 0, *, chunks: bool = True) -> Loss:
+        """What losing ``size`` bytes from ``pos`` costs (but ``kept`` messages): the messages
+        and span the index gives the chunks starting in them (unknown without an index)."""
+        end = pos + (size or 1)
+        lost = [c for p, c in self._chunks.items() if pos <= p < end] if chunks else []
+        if not lost:
+            return Loss(bytes=size)
+        count = sum(sum(c.counts.values()) for c in lost)
+        spans = [c for c in lost if c.counts]
+        return Loss(
+            messages=max(0, count - kept),
+            bytes=size,
+            start_ns=min((c.start_ns for c in spans), default=None),
+            end_ns=max((c.end_ns for c in spans), default=None),
+        )
 
     def close(self) -> None:
         """Close the file; safe to call twice."""

@@ -9,7 +9,7 @@ import os
 import posixpath
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePath, PurePosixPath
 from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
@@ -21,10 +21,11 @@ from medkit_replay.files import open_regular, read_limited_text
 from medkit_replay.inputs.db3 import SQLITE_MAGIC, Db3File
 from medkit_replay.inputs.mcap import MAGIC as MCAP_MAGIC, McapFile
 from medkit_replay.inputs.merge import Timed, reorder_batches
+from medkit_replay.inputs.skipped import report_skipped
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, TEMP_MARGIN, NotABagError, temp_room
 from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder
-from medkit_replay.model import InputSummary, TopicSummary
+from medkit_replay.model import InputSummary, Loss, TopicSummary
 from medkit_replay.msgdefs import DefinitionError
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded
 
@@ -38,10 +39,10 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.merge import Bound
     from medkit_replay.inputs.selection import Role
-    from medkit_replay.inputs.source import InputContext
+    from medkit_replay.inputs.source import InputContext, Warn
     from medkit_replay.inputs.storage import Connection, Raw, StorageFile
 
-STORAGE_FILES: dict[str, Callable[[Path, int, Callable[[str], None]], StorageFile]] = {
+STORAGE_FILES: dict[str, Callable[[Path, int, Warn], StorageFile]] = {
     ".mcap": McapFile,
     ".db3": Db3File,
 }
@@ -61,6 +62,8 @@ class _Metadata:
     storage: str | None = None
     files: list[str] = field(default_factory=list)
     starts: dict[str, int] = field(default_factory=dict)
+    listed: dict[str, Loss] = field(default_factory=dict)
+    """What losing each file costs, as its ``files`` entry says (messages, span)."""
     compression_format: str = ""
     compression_mode: str = ""
 
@@ -192,6 +195,8 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
             meta.starts.setdefault(base, start)
         elif written is not None:
             bad_start.append((k, f"{_brief(name)}: {_brief(written)}"))
+        if base:
+            meta.listed.setdefault(base, _listed_loss(entry, start))
     lines = _entry_lines(root, "files", len(listed)) if no_path or bad_start else []
     if no_path:
         warn(_unusable(path, "files", lines, no_path, "without a file path"))
@@ -219,6 +224,21 @@ def _read_metadata(directory: Path, warn: Callable[[str], None]) -> _Metadata | 
     mode = str(info.get("compression_mode") or "").lower()
     meta.compression_mode = "" if mode == "none" else mode
     return meta
+
+
+def _listed_loss(entry: dict[object, object], start: object) -> Loss:
+    """What a ``files`` entry says its file holds: messages and span, where it says so."""
+    count = entry.get("message_count")
+    duration = entry.get("duration")
+    duration = duration.get("nanoseconds") if isinstance(duration, dict) else None
+    known = isinstance(start, int) and isinstance(duration, int) and 0 <= start <= start + duration
+    return Loss(
+        messages=count if isinstance(count, int) and count >= 0 else None,
+        start_ns=start if known and isinstance(start, int) else None,
+        end_ns=start + duration
+        if known and isinstance(start, int) and isinstance(duration, int)
+        else None,
+    )
 
 
 def _listed(
@@ -303,7 +323,9 @@ def open_folder(
     listed = [path / name for name in meta.files]
     present = {p: exists(p) for p in listed}
     for missing in (p for p in listed if not present[p]):
-        ctx.warn(f"{missing}: listed in metadata.yaml but missing; its messages are lost")
+        ctx.warn(
+            f"{missing}: listed in metadata.yaml but missing", meta.listed.get(missing.name, Loss())
+        )
     unlisted = [p for p in found if p not in listed]
     if unlisted:
         names = ", ".join(p.name for p in unlisted)
@@ -336,7 +358,7 @@ class Rosbag2Input:
         self._readers: dict[tuple[int, int], tuple[Role, Decoder]] = {}
         self._by_connection: dict[int, tuple[Role, Decoder]] = {}
         self._connections: list[Connection] = []
-        self._failures: dict[str, tuple[int, int, str]] = {}
+        self._failures: dict[str, tuple[int, int, int, str]] = {}
         self._late: tuple[int, int] = (0, 0)  # how many, first time
         self._used = False
         self._message_zstd = meta.compression_mode == "message"
@@ -350,7 +372,7 @@ class Rosbag2Input:
                 except NotABagError as exc:
                     problems.append(str(exc) if file_path == path else f"{file_path.name}: {exc}")
                     if len(paths) > 1:
-                        self.ctx.warn(f"{file_path}: {exc}; skipped")
+                        self.ctx.warn(f"{file_path}: {exc}", self._file_loss(file_path))
         except BaseException:
             self.close()
             raise
@@ -367,6 +389,14 @@ class Rosbag2Input:
             min((s for s in starts[k + 1 :] if s is not None), default=None)
             for k in range(len(starts))
         ]
+
+    def _file_loss(self, path: Path) -> Loss:
+        """What skipping a whole storage file costs: its bytes, and what metadata.yaml says."""
+        listed = self._meta.listed.get(path.name, Loss())
+        try:
+            return replace(listed, bytes=path.stat().st_size)
+        except OSError:
+            return listed
 
     def _open_file(self, path: Path, file_no: int) -> StorageFile:
         name = path.name
@@ -411,7 +441,8 @@ class Rosbag2Input:
                         sink.write(out[: limit - written])
                         self.ctx.warn(
                             f"{path}: decompresses to more than {limit:,} bytes "
-                            f"({_LIMIT_RULE}); only the first {limit:,} are read"
+                            f"({_LIMIT_RULE}); only the first {limit:,} are read",
+                            Loss(),
                         )
                         break
                     sink.write(out)
@@ -425,7 +456,9 @@ class Rosbag2Input:
             if not written:
                 target.unlink(missing_ok=True)
                 raise NotABagError(f"cannot be decompressed ({_one_line(exc)})") from None
-            self.ctx.warn(f"{path}: compressed data is damaged ({_one_line(exc)}); read the rest")
+            self.ctx.warn(
+                f"{path}: compressed data is damaged ({_one_line(exc)}); read the rest", Loss()
+            )
         return target
 
     def _magics(self, name: str) -> tuple[bytes, ...]:
@@ -436,11 +469,11 @@ class Rosbag2Input:
             return (_MAGICS[storage],)
         return tuple(_MAGICS.values())
 
-    def _warn(self, text: str) -> None:
+    def _warn(self, text: str, loss: Loss | None = None, /) -> None:
         text = f"{self.path}: {text}"
         if text not in self._warned:
             self._warned.add(text)
-            self.ctx.warn(text)
+            self.ctx.warn(text, loss)
 
     def _accepts(self, file_no: int) -> Callable[[Connection], bool]:
         def accept(connection: Connection) -> bool:
@@ -478,7 +511,7 @@ class Rosbag2Input:
             try:
                 yield from file.read(self._accepts(file_no), self._caps[file_no])
             except Exception as exc:  # last resort: no reader failure may end the replay
-                self.ctx.warn(f"{file.path}: reading stopped ({type(exc).__name__}: {exc})")
+                self.ctx.warn(f"{file.path}: reading stopped ({type(exc).__name__}: {exc})", Loss())
 
     def messages(self) -> Iterator[Timed[Message]]:
         """Yield the selected, decoded messages once, sorted by (log time, position)."""
@@ -533,20 +566,11 @@ class Rosbag2Input:
         self._late = (count + 1, first if count else item.t_ns)
 
     def _failed(self, topic: str, t_ns: int, exc: Exception) -> None:
-        count, first, reason = self._failures.get(topic, (0, t_ns, _one_line(exc)))
-        self._failures[topic] = (count + 1, first, reason)
+        count, first, _, reason = self._failures.get(topic, (0, t_ns, t_ns, _one_line(exc)))
+        self._failures[topic] = (count + 1, first, t_ns, reason)
 
     def _report_losses(self) -> None:
-        for topic, (count, first, reason) in sorted(self._failures.items()):
-            self._warn(
-                f"{count} messages on {topic} cannot be decoded and were skipped "
-                f"(first at t={first}: {reason})"
-            )
-        if self._late[0]:
-            self._warn(
-                f"{self._late[0]} messages are stored too far out of time order to be "
-                f"replayed in order and were skipped (first at t={self._late[1]})"
-            )
+        report_skipped(self._warn, self._failures, self._late)
 
     def summary(self) -> InputSummary:
         """Topics (all of them, with role where read), counts and time span of this input."""

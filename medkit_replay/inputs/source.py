@@ -13,7 +13,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.inputs.merge import Timed
     from medkit_replay.inputs.selection import Role, Selection
-    from medkit_replay.model import InputSummary
+    from medkit_replay.model import InputSummary, Loss
 
 
 class Message(NamedTuple):
@@ -36,6 +36,13 @@ class Message(NamedTuple):
     msg: object
 
 
+class Warn(Protocol):
+    """Told each loss or oddity in one line; damage comes with what it cost (:class:`Loss`),
+    which the recording adds to the line and keeps for the result."""
+
+    def __call__(self, text: str, loss: Loss | None = None, /) -> None: ...
+
+
 class InputContext(NamedTuple):
     """What an input needs from the recording that opens it.
 
@@ -46,7 +53,7 @@ class InputContext(NamedTuple):
 
     input_index: int
     selection: Selection
-    warn: Callable[[str], None]
+    warn: Warn
     use_index: bool = True
 
 

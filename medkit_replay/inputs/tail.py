@@ -15,6 +15,7 @@ from medkit_replay.inputs.mcap_tail import McapTail
 from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _natural_key
 from medkit_replay.inputs.storage import NotABagError
 from medkit_replay.inputs.wal import is_wal_mode
+from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -157,7 +158,7 @@ class TailInput(Rosbag2Input):
                 try:
                     file = self._open_tail(path, index)
                 except NotABagError as exc:
-                    self.ctx.warn(f"{path}: {exc}; skipped")
+                    self.ctx.warn(f"{path}: {exc}", self._file_loss(path))
                     index += 1
                     continue
                 self._files.append(file)
@@ -169,7 +170,7 @@ class TailInput(Rosbag2Input):
                         self._follow.check()  # a stop is heard while data keeps coming
                         self._follow.saw_data()  # a backlog read is not idle time
                 except Exception as exc:  # as for a finished file: no reader failure ends it
-                    self.ctx.warn(f"{path}: reading stopped ({type(exc).__name__}: {exc})")
+                    self.ctx.warn(f"{path}: reading stopped ({type(exc).__name__}: {exc})", Loss())
                 index += 1
             self._follow.finished = True
         except FollowStopped as stop:

@@ -21,6 +21,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from medkit_replay.model import read_in_part
 from medkit_replay.outputs.console import draw, drawn, literal_console, plain_text
 from medkit_replay.text import WARNING_CAP, clip, printable, seconds, severity_name
 
@@ -168,6 +169,8 @@ def _header(result: Result, clock: _Clock | None, end_ns: int | None) -> list[Re
             lines.append(_fetched(*result.fetched[summary.path]))
     if len(result.inputs) > 3:
         lines.append(_markup("  [dim]... and {n} more[/dim]", n=len(result.inputs) - 3))
+    for loss in result.losses_by_input():
+        lines.append(_markup("[bold yellow]{lost}[/bold yellow]", lost=read_in_part(loss)))
     if clock is None or end_ns is None:
         lines.append(Text("recording: empty (no message read)"))
     else:

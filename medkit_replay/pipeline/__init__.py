@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.remote_store import Tally
-    from medkit_replay.model import InputSummary
+    from medkit_replay.model import InputSummary, Loss
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.routing import Handler
     from medkit_replay.pipeline.tracing import Tracer
@@ -246,6 +246,7 @@ def replay(
         evidence_notes=found.notes,
         evidence_refused=found.refused,
         fetched=fetched,
+        losses=run.losses,
     )
 
 
@@ -273,6 +274,7 @@ class Pass:
         warnings: the recording's own warnings (damage, refusals).
         summaries: one summary per input.
         consumed: which paths into the fault manager took how much of the recording.
+        losses: what the damage warned of cost, one per damage warning.
     """
 
     messages: int
@@ -280,6 +282,7 @@ class Pass:
     warnings: list[str]
     summaries: tuple[InputSummary, ...]
     consumed: Consumption
+    losses: tuple[Loss, ...] = ()
 
 
 def replay_pass(
@@ -328,4 +331,11 @@ def replay_pass(
             meter.finish(messages, clock.last_ns)
         summaries = recording.inputs
         consumed = consumption(router, routes, summaries, messages)
-        return Pass(messages, gate, list(recording.warnings), summaries, consumed)
+        return Pass(
+            messages,
+            gate,
+            list(recording.warnings),
+            summaries,
+            consumed,
+            tuple(recording.losses),
+        )

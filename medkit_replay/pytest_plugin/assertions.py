@@ -9,8 +9,8 @@ import difflib
 import re
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import NS_PER_SEC
-from medkit_replay.pytest_plugin.session import empty_allowed, keeping_modules
+from medkit_replay.model import NS_PER_SEC, strict_failure
+from medkit_replay.pytest_plugin.session import empty_allowed, keeping_modules, strict_requested
 from medkit_replay.pytest_plugin.timeline import clean, fault_timeline, recording_start_ns
 from medkit_replay.text import seconds
 
@@ -167,11 +167,16 @@ def assert_status(result: Result, fault_code: str, status: str) -> None:
 
 
 def assert_within_budget(
-    result: Result, budget_path: PathLike, *, allow_empty: bool | None = None
+    result: Result,
+    budget_path: PathLike,
+    *,
+    allow_empty: bool | None = None,
+    strict: bool | None = None,
 ) -> None:
     """Assert that the result keeps the fault budget in ``budget_path`` (the budget YAML of
     ``medkit-replay check``, docs/budgets.md). The failure message gives the verdict of every
-    rule that failed, its offending faults, and their timelines.
+    rule that failed, its offending faults, and their timelines. ``strict`` (default: pytest's
+    ``--strict-replay``) fails a recording read only in part, as ``check --strict``.
 
     A replay in which nothing reached the fault manager fails, whatever the rules, with one
     line saying what was missing, unless ``allow_empty`` (None: the ``--allow-empty-replay``
@@ -198,11 +203,16 @@ def assert_within_budget(
             )
         verdicts = evaluate(budget, result)
     failed = [v for v in verdicts if not v.passed]
-    if not failed:
+    damage = strict_requested() if strict is None else strict
+    damaged = [clean(strict_failure(x)) for x in result.losses_by_input()] if damage else []
+    if not failed and not damaged:
         return
+    if not failed:
+        raise AssertionError("\n".join(["recording read only in part:", *damaged]))
     lines = [
         f"fault budget {clean(budget.title)} exceeded: {len(failed)} of {len(verdicts)} "
-        f"rule(s) failed ({clean(budget_path)})"
+        f"rule(s) failed ({clean(budget_path)})",
+        *damaged,
     ]
     codes: list[str] = []
     for verdict in failed:

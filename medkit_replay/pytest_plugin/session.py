@@ -52,7 +52,8 @@ def _restore_modules() -> None:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """Add ``--update-golden``, ``--allow-empty-replay`` and ``--golden-max-report-mb``."""
+    """Add ``--update-golden``, ``--allow-empty-replay``, ``--strict-replay`` and
+    ``--golden-max-report-mb``."""
     group = parser.getgroup("medkit-replay", "medkit-replay regression tests")
     group.addoption(
         "--update-golden",
@@ -68,6 +69,13 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         dest="medkit_replay_allow_empty",
         help="medkit-replay: let assert_within_budget pass a replay in which nothing reached "
         "the fault manager (it fails by default).",
+    )
+    group.addoption(
+        "--strict-replay",
+        action="store_true",
+        default=False,
+        dest="medkit_replay_strict",
+        help="medkit-replay: assert_within_budget fails a recording read only in part (damage).",
     )
     group.addoption(
         "--golden-max-report-mb",
@@ -118,6 +126,13 @@ def empty_allowed() -> bool:
     if not _configs:
         return False
     return bool(_configs[-1].getoption("medkit_replay_allow_empty"))
+
+
+def strict_requested() -> bool:
+    """Whether ``--strict-replay`` was given (False outside a pytest session)."""
+    if not _configs:
+        return False
+    return bool(_configs[-1].getoption("medkit_replay_strict"))
 
 
 def golden_size_limit() -> int | None:

@@ -24,8 +24,10 @@ from medkit_replay.model import (
     ClearRecord,
     EngineOutput,
     FaultEvent,
+    Loss,
     ReportRecord,
     Transition,
+    total_loss,
 )
 from medkit_replay.pipeline import replay_pass
 from medkit_replay.pipeline.assemble import assemble_result
@@ -65,10 +67,12 @@ class SweepJob:
 
 @dataclass(frozen=True, slots=True)
 class SweepPart:
-    """A job's rows: one run row per variant, code rows variant by variant."""
+    """A job's rows: one run row per variant, code rows variant by variant; what damage cost
+    its input in total (None: nothing lost; not a column: ``--strict`` fails the sweep on it)."""
 
     runs: tuple[RunRow, ...]
     codes: tuple[CodeRow, ...]
+    lost: Loss | None = None
 
     @property
     def ok(self) -> bool:
@@ -129,7 +133,10 @@ def _groups(
 
 
 def _run_group(
-    job: SweepJob, options: ReplayOptions, members: Sequence[tuple[Variant, VariantConfig]]
+    job: SweepJob,
+    options: ReplayOptions,
+    members: Sequence[tuple[Variant, VariantConfig]],
+    losses: list[Loss],
 ) -> dict[int, tuple[RunRow, list[CodeRow]]]:
     spooled = job.budget is not None
     runs = [_Variant(variant, config, spooled=spooled) for variant, config in members]
@@ -139,6 +146,7 @@ def _run_group(
         [opened_recording(job.path)], Router(options), fan, fan.apply, fan.report_fields, spools
     )
     fan.finish()
+    losses[:] = passed.losses  # the same damage whatever the bridge settings
     rows: dict[int, tuple[RunRow, list[CodeRow]]] = {}
     for run, timeline in zip(runs, fan.timelines, strict=True):
         variant_id = run.variant.id
@@ -179,8 +187,9 @@ def sweep_job(job: SweepJob) -> SweepPart:
     try:
         opened_recording(job.path)  # refused here once, before any pass
         rows: dict[int, tuple[RunRow, list[CodeRow]]] = {}
+        losses: list[Loss] = []
         for options, members in _groups(job.configs, job.variants):
-            rows.update(_run_group(job, options, members))
+            rows.update(_run_group(job, options, members, losses))
     except MedkitReplayError as err:
         error = err.render()
     except FileRefusedError as err:
@@ -190,7 +199,9 @@ def sweep_job(job: SweepJob) -> SweepPart:
     else:
         ordered = [rows[v.index] for v in job.variants]
         return SweepPart(
-            tuple(run for run, _ in ordered), tuple(c for _, codes in ordered for c in codes)
+            tuple(run for run, _ in ordered),
+            tuple(c for _, codes in ordered for c in codes),
+            total_loss(losses, job.label) if losses else None,
         )
     return failed_part(job, error)
 

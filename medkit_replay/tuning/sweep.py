@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
     from medkit_replay.checks import Budget
+    from medkit_replay.model import Loss
     from medkit_replay.tuning.grid import Variant, Vary
 
 TABLES = ("runs", "run_codes", "variants", "codes")
@@ -123,6 +124,8 @@ class Outcome:
     codes: tuple[CodeTotal, ...]
     failed: tuple[RunRow, ...]
     over: tuple[tuple[str, str, int], ...] = ()
+    lost: tuple[Loss, ...] = ()
+    """What damage cost each input read only in part, in input order."""
 
 
 def _columns(grid: Grid, names: Sequence[str]) -> list[str]:
@@ -157,6 +160,7 @@ def run_sweep(
     totals = Totals(grid.variants)
     failed: list[RunRow] = []
     over: dict[tuple[str, str], int] = {}
+    lost: dict[str, Loss] = {}
     writers: list[TableWriter] = []
 
     def open_writers() -> None:
@@ -177,6 +181,8 @@ def run_sweep(
 
     def take(part: SweepPart) -> None:
         open_writers()
+        if part.lost is not None:  # an input's several jobs each say it
+            lost.setdefault(part.lost.input, part.lost)
         for row in part.runs:
             totals.add_run(row)
             if row.error:
@@ -219,7 +225,7 @@ def run_sweep(
     for writer in writers:
         writer.__exit__(None, None, None)
     kept = tuple((path, why, n) for (path, why), n in over.items())
-    return Outcome(tuple(variant_totals), code_totals, tuple(failed), kept)
+    return Outcome(tuple(variant_totals), code_totals, tuple(failed), kept, tuple(lost.values()))
 
 
 def _kinds(grid: Grid, record: type[Any]) -> dict[str, str]:

@@ -258,6 +258,18 @@ def flipped(source: Path, target: Path, offset: int) -> Path:
     return target
 
 
+def chunks(mcap: Path) -> list[tuple[int, int]]:
+    """(start, end) byte offsets of each chunk record of a well-formed MCAP (test-side parser)."""
+    data = mcap.read_bytes()
+    pos, found = 8, []
+    while pos + 9 <= len(data) and data[pos] != 0x0F:
+        end = pos + 9 + int.from_bytes(data[pos + 1 : pos + 9], "little")
+        if data[pos] == 0x06:
+            found.append((pos, end))
+        pos = end
+    return found
+
+
 TOPICS = ("/camera", "/diagnostics", "/odom", "/tf")
 COMPRESSIONS = {
     "none": CompressionType.NONE,

@@ -70,7 +70,7 @@ def test_windows_read_what_the_mcap_library_reads(
 ) -> None:
     path = write_mcap(tmp_path / "r.mcap", recording(seed), compression)
     warnings: list[str] = []
-    file = McapFile(path, 0, warnings.append)
+    file = McapFile(path, 0, lambda text, loss=None, /: warnings.append(text))
     assert file.chunk_indexed
     rng = random.Random(seed)
     for _ in range(40):

@@ -80,7 +80,7 @@ def test_an_unindexed_bag_is_read_whole_with_a_warning(tmp_path: Path, chunks: A
     assert times(messages) == times(full(bag))
     assert warnings == [
         f"{cut}: not indexed (the recorder stopped before writing its index?); "
-        "its chunks are scanned"
+        "its chunks are scanned; how much was lost is unknown"
     ]
     with open_recording([cut]) as recording:
         list(recording.messages())
@@ -133,7 +133,7 @@ def test_a_bag_cut_inside_its_index_is_scanned(tmp_path: Path) -> None:
     assert times(messages) == times(full(bag))
     assert len(warnings) == 1
     assert warnings[0].startswith(f"{cut}: index is damaged (")
-    assert warnings[0].endswith("; its chunks are scanned")
+    assert warnings[0].endswith("; its chunks are scanned; no message lost")
 
 
 @pytest.mark.parametrize("chunks", ["bz2", "lz4"])
@@ -152,10 +152,14 @@ def test_a_corrupt_compressed_chunk_costs_that_chunk(tmp_path: Path, chunks: Any
         if w.startswith(f"{damaged}: chunk at byte {pos} cannot be decompressed")
     ]
     assert len(warnings) == 1
-    assert warnings[0].endswith("; its messages are lost")
     kept = times(messages)
     assert set(kept) < set(expected)
     assert len(expected) - len(kept) < 10  # one chunk of a few messages
+    lost = sorted(set(expected) - set(kept))
+    assert warnings[0].endswith(
+        f"; {len(lost)} messages ({end - pos:,} bytes) from bag time "
+        f"{lost[0] / 1e9:.3f} s to {lost[-1] / 1e9:.3f} s skipped"
+    )
 
 
 def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path) -> None:
@@ -177,8 +181,10 @@ def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path)
     messages, warnings = got
     assert len(warnings) == 1
     assert warnings[0].startswith(f"{damaged}: chunk at byte {pos}: record at byte ")
-    assert warnings[0].endswith("runs past it; the 1 messages before it are kept")
+    assert "runs past it; the 1 messages before it are kept; " in warnings[0]
     assert set(times(messages)) < set(expected)
+    lost = len(expected) - len(messages)
+    assert f"; {lost} messages (size unknown) from bag time " in warnings[0]
 
 
 @pytest.mark.parametrize(
@@ -187,7 +193,7 @@ def test_a_corrupt_record_in_a_plain_chunk_keeps_those_before_it(tmp_path: Path)
         ("chunk_header_len", 0xFFFFFFF0, "damaged record at byte"),
         ("chunk_data_len", 0xFFFFFFF0, "damaged record at byte"),
         ("chunk_data_len", 0x3FFFFFF0, "file ends inside a record"),
-        ("chunk_size", 0xFFFFFFF0, "bytes uncompressed; skipped as damaged"),
+        ("chunk_size", 0xFFFFFFF0, "bytes uncompressed: damaged"),
         ("chunk_size", 0x3FFFFFF0, "cannot be decompressed"),
         ("message_data_len", 0xFFFFFFF0, "runs past it"),
         ("index_pos", 0xFFFFFFFFFFFFFFF0, "is beyond the end of the file"),
@@ -297,9 +303,11 @@ def test_a_chunk_of_unknown_compression_is_named(tmp_path: Path) -> None:
     got = attempt(damaged)
     assert not isinstance(got, InputError)
     _, warnings = got
-    assert warnings == [
-        f"{damaged}: chunk at byte {pos}: compression 'zzz' is not supported; it is lost"
-    ]
+    assert len(warnings) == 1
+    assert warnings[0].startswith(
+        f"{damaged}: chunk at byte {pos}: compression 'zzz' is not supported; it is lost; "
+    )
+    assert warnings[0].endswith(" skipped")
 
 
 def test_messages_whose_connection_record_is_lost_are_counted(tmp_path: Path) -> None:
@@ -342,5 +350,5 @@ def test_a_bag_left_active_by_its_recorder_is_read(tmp_path: Path) -> None:
     assert times(messages) == times(full(bag))
     assert warnings == [
         f"{active}: not indexed (the recorder stopped before writing its index?); "
-        "its chunks are scanned"
+        "its chunks are scanned; how much was lost is unknown"
     ]

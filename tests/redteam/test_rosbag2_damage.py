@@ -115,9 +115,10 @@ def test_rows_without_blob_data_are_counted_and_named(tmp_path: Path) -> None:
         connection.execute("UPDATE messages SET data = 'text' WHERE id = 4")
         connection.commit()
     _, report = analyze(tmp_path, bag)
-    assert f"{db}: 2 message rows without a binary payload skipped (ids 2, 4)" in warnings_of(
-        report
-    )
+    assert (
+        f"{db}: 2 message rows without a binary payload (ids 2, 4); 2 messages (size unknown) "
+        "at unknown bag times skipped"
+    ) in warnings_of(report)
     assert messages_read(report) == 3
 
 
@@ -136,8 +137,8 @@ def test_timestamps_that_are_not_integers_in_range_are_skipped(
         connection.commit()
     _, report = analyze(tmp_path, bag)
     assert (
-        f"{db}: 2 message rows skipped: not an integer log time in [0, 2^63) (ids 1, 3)"
-        in warnings_of(report)
+        f"{db}: 2 message rows: not an integer log time in [0, 2^63) (ids 1, 3); "
+        "2 messages (size unknown) at unknown bag times skipped" in warnings_of(report)
     )
     assert messages_read(report) == 2
     text = json.dumps(report)
