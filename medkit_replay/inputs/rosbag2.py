@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import posixpath
 import re
+import stat
 import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePath, PurePosixPath
@@ -394,9 +395,11 @@ class Rosbag2Input:
         """What skipping a whole storage file costs: its bytes, and what metadata.yaml says."""
         listed = self._meta.listed.get(path.name, Loss())
         try:
-            return replace(listed, bytes=path.stat().st_size)
+            info = path.stat()
         except OSError:
             return listed
+        # A FIFO or device has no size that says what it held.
+        return replace(listed, bytes=info.st_size) if stat.S_ISREG(info.st_mode) else listed
 
     def _open_file(self, path: Path, file_no: int) -> StorageFile:
         name = path.name
