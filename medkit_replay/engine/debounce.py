@@ -6,6 +6,7 @@ Pure functions over integers and status strings; no state, no I/O, no clock.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING, TypeAlias
 
 if TYPE_CHECKING:
@@ -69,16 +70,24 @@ def clamp(counter: int, config: DebounceConfig) -> int:
     return counter
 
 
-def compute_status(counter: int, current: Status | None, config: DebounceConfig) -> Status | None:
+def compute_status(
+    counter: int,
+    current: Status | None,
+    config: DebounceConfig,
+    confirm: bool = True,
+    heal: bool = True,
+    latch: bool = True,
+) -> Status | None:
     """Upstream's status rule, with its CONFIRMED/HEALED latch and no flapping at zero.
 
-    Returns ``current`` unchanged at counter 0 (None only when ``current`` is None).
+    Returns ``current`` unchanged at counter 0 (None only when ``current`` is None). The
+    switches are for releases before one rule served both storages (see :func:`status_rule`).
     """
-    if counter <= config.confirmation_threshold:
+    if confirm and counter <= config.confirmation_threshold:
         return "CONFIRMED"
-    if config.healing_enabled and counter >= config.healing_threshold:
+    if heal and config.healing_enabled and counter >= config.healing_threshold:
         return "HEALED"
-    if current in ("CONFIRMED", "HEALED"):
+    if latch and current in _LATCHED:
         return current
     if counter < 0:
         return "PREFAILED"
@@ -88,30 +97,15 @@ def compute_status(counter: int, current: Status | None, config: DebounceConfig)
 
 
 def status_rule(*, confirm: bool, heal: bool, latch: bool) -> StatusRule:
-    """The status rule a storage applies after one report, as chosen at construction.
+    """The status rule a storage applies after one report, chosen once at construction.
 
     ``confirm`` and ``heal``: whether the rule looks at that threshold at all (0.6.0's SQLite
     storage checks only confirmation after a FAILED and only healing after a PASSED);
-    ``latch``: CONFIRMED and HEALED hold until the opposite threshold. All three on is
-    :func:`compute_status`, returned as it is.
+    ``latch``: CONFIRMED and HEALED hold until the opposite threshold.
     """
     if confirm and heal and latch:
         return compute_status
-
-    def rule(counter: int, current: Status | None, config: DebounceConfig) -> Status | None:
-        if confirm and counter <= config.confirmation_threshold:
-            return "CONFIRMED"
-        if heal and config.healing_enabled and counter >= config.healing_threshold:
-            return "HEALED"
-        if latch and current in _LATCHED:
-            return current
-        if counter < 0:
-            return "PREFAILED"
-        if counter > 0:
-            return "PREPASSED"
-        return current
-
-    return rule
+    return partial(compute_status, confirm=confirm, heal=heal, latch=latch)
 
 
 def step_in_band(counter: int, delta: int, config: DebounceConfig) -> int:

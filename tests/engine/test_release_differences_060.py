@@ -12,8 +12,6 @@ from typing import TYPE_CHECKING, Literal
 import pytest
 
 from medkit_replay.config.effective import effective_config
-from medkit_replay.config.fault_manager import fault_manager_config
-from medkit_replay.config.params import load_parameters
 from medkit_replay.config.replay_options import ReplayOptions
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManager, FaultManagerConfig
@@ -21,6 +19,7 @@ from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_SEC, ClearRequest, ReportRequest
 from medkit_replay.pipeline import replay
 from medkit_replay.releases import RELEASES, Release, release_named
+from tests.engine.test_upstream_node_params import node_config
 
 if TYPE_CHECKING:
     from medkit_replay.model import Status
@@ -191,11 +190,7 @@ def test_d6_auto_confirmed_fault_falls_back_and_confirms_again_at_060() -> None:
 # -- D7: threshold sanitising (6920ba42, e9697424) ----------------------------------------------
 
 
-def _config(tmp_path: Path, body: str, release: Release) -> tuple[FaultManagerConfig, list[str]]:
-    path = tmp_path / "params.yaml"
-    lines = "".join(f"    {line}\n" for line in body.splitlines())
-    path.write_text("fault_manager:\n  ros__parameters:\n" + lines)
-    return fault_manager_config(load_parameters([path]).node("fault_manager"), release)
+_config = node_config
 
 
 def test_d7_confirmation_threshold_zero_is_kept_at_060(tmp_path: Path) -> None:
@@ -306,3 +301,16 @@ def test_replay_of_the_example_mission_under_each_release(tmp_path: Path) -> Non
         results[name] = replay([EXAMPLE], [config])
     assert results["0.6.0"].near_misses == ()
     assert results["0.7.0"].near_misses != ()
+
+
+def test_d9_new_fault_under_a_wrapped_healing_threshold(tmp_path: Path) -> None:
+    """healing_threshold 2**31 wraps to INT32_MIN, kept at 0.6.0: in-memory storage checks
+    healing on a new fault and creates it HEALED, SQLite (FAILED: no healing check) PREFAILED;
+    0.7.0 sanitises it to 3."""
+    body = "confirmation_threshold: -3\nhealing_enabled: true\nhealing_threshold: 2147483648"
+    old, _ = _config(tmp_path, body, R060)
+    assert old.debounce.healing_threshold == -(2**31)
+    assert state(run("F", R060, old.debounce, storage_type="memory")) == ("HEALED", -1)
+    assert state(run("F", R060, old.debounce)) == ("PREFAILED", -1)
+    new, _ = _config(tmp_path, body, R070)
+    assert state(run("F", R070, new.debounce, storage_type="memory")) == ("PREFAILED", -1)

@@ -13,22 +13,20 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from medkit_replay.config.fault_manager import fault_manager_config
-from medkit_replay.config.params import load_parameters
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManager, FaultManagerConfig
-from medkit_replay.model import NS_PER_SEC, ReportRequest
+from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
 from tests.engine import (
     test_upstream_sqlite,
     test_upstream_storage,
     test_upstream_storage_healing,
 )
+from tests.engine.test_upstream_node_params import node_config, report
 from tests.engine.upstream_support import (
     CLEARED_EV,
     CONFIRMED_EV,
     ERROR,
-    FAILED,
     NO_EVENTS,
     UPDATED_EV,
     WARN,
@@ -331,26 +329,13 @@ def test_changed_scenario_at_060(case: Case) -> None:
 # -- node-level and time-based tests --------------------------------------------------------
 
 
-def _report(manager: FaultManager, t_ns: int, code: str, severity: int, source: str) -> None:
-    manager.report(
-        ReportRequest(
-            t_ns=t_ns,
-            fault_code=code,
-            event_type=FAILED,
-            severity=severity,
-            description="Test fault",
-            source_id=source,
-        )
-    )
-
-
 @pytest.mark.parametrize("backend", [MEMORY, SQLITE])
 def test_update_existing_fault_publishes_updated_event(backend: str) -> None:
     """FaultEventPublishingTest.UpdateExistingFaultPublishesUpdatedEvent at 0.6.0: the
     fault_updated of the second report carries occurrence_count 2 (1 at 505bc2d5)."""
     manager = FaultManager(FaultManagerConfig(release=R060, storage_type=backend))
-    _report(manager, 1 * S, "TEST_FAULT_2", WARN, "/test_node1")
-    _report(manager, 2 * S, "TEST_FAULT_2", ERROR, "/test_node2")
+    report(manager, 1 * S, "TEST_FAULT_2", WARN, "/test_node1")
+    report(manager, 2 * S, "TEST_FAULT_2", ERROR, "/test_node2")
     events = events_of(manager)
     assert [e.event_type for e in events] == ["fault_confirmed", "fault_updated"]
     assert events[1].fault.fault_code == "TEST_FAULT_2"
@@ -368,27 +353,17 @@ def test_time_based_confirmation(backend: str, after_ns: int) -> None:
         )
     )
     t0 = 1_000 * S
-    _report(manager, t0, "FAULT_1", ERROR, "/node1")
+    report(manager, t0, "FAULT_1", ERROR, "/node1")
     assert manager.auto_confirm_tick(t0 + 5 * S) == []
     confirmed = manager.auto_confirm_tick(t0 + 15 * S)
     assert confirmed == (["FAULT_1"] if after_ns else [])
     assert manager.storage.faults["FAULT_1"].status == ("CONFIRMED" if after_ns else "PREFAILED")
 
 
-def _node_config(tmp_path: Path, params: str, release: str) -> FaultManagerConfig:
-    body = "".join(f"    {line}\n" for line in params.splitlines())
-    path = tmp_path / "params.yaml"
-    path.write_text("fault_manager:\n  ros__parameters:\n" + body)
-    config, _ = fault_manager_config(
-        load_parameters([path]).node("fault_manager"), release_named(release)
-    )
-    return config
-
-
 def test_confirmation_threshold_disabled(tmp_path: Path) -> None:
     """FaultManagerNodeParameterTest.ConfirmationThresholdDisabled at 0.6.0: storage_type
     memory, confirmation_threshold 0 stays 0 ("0 means immediate confirmation")."""
-    config = _node_config(tmp_path, 'storage_type: "memory"\nconfirmation_threshold: 0', "0.6.0")
+    config, _ = node_config(tmp_path, 'storage_type: "memory"\nconfirmation_threshold: 0', R060)
     assert config.storage_type == MEMORY
     assert config.debounce.confirmation_threshold == 0
     assert FaultManager(config).resolver.global_config.confirmation_threshold == 0
