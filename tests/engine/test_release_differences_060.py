@@ -314,3 +314,13 @@ def test_d9_new_fault_under_a_wrapped_healing_threshold(tmp_path: Path) -> None:
     assert state(run("F", R060, old.debounce)) == ("PREFAILED", -1)
     new, _ = _config(tmp_path, body, R070)
     assert state(run("F", R070, new.debounce, storage_type="memory")) == ("PREFAILED", -1)
+
+
+def test_d9_both_thresholds_zero() -> None:
+    """Conf 0, heal 0, healing on (0.6.0 keeps both): F then P is CONFIRMED in memory, HEALED in
+    SQLite; 0.7.0 (conf sanitised to -1 by the manager) heals it on both."""
+    zero = DebounceConfig(confirmation_threshold=0, healing_enabled=True, healing_threshold=0)
+    assert state(run("FP", R060, zero, storage_type="memory")) == ("CONFIRMED", 0)
+    assert state(run("FP", R060, zero)) == ("HEALED", 0)
+    assert state(run("FP", R070, zero, storage_type="memory")) == ("HEALED", 0)
+    assert state(run("FP", R070, zero)) == ("HEALED", 0)
