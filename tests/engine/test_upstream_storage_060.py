@@ -15,7 +15,7 @@ import pytest
 
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManager, FaultManagerConfig
-from medkit_replay.model import NS_PER_SEC
+from medkit_replay.model import NS_PER_SEC, ClearRequest
 from medkit_replay.releases import release_named
 from tests.engine import (
     test_upstream_sqlite,
@@ -26,6 +26,7 @@ from tests.engine.test_upstream_node_params import node_config, report
 from tests.engine.upstream_support import (
     CLEARED_EV,
     CONFIRMED_EV,
+    CRITICAL,
     ERROR,
     NO_EVENTS,
     UPDATED_EV,
@@ -367,3 +368,59 @@ def test_confirmation_threshold_disabled(tmp_path: Path) -> None:
     assert config.storage_type == MEMORY
     assert config.debounce.confirmation_threshold == 0
     assert FaultManager(config).resolver.global_config.confirmation_threshold == 0
+
+
+NODE_PARAMETERS = (
+    # (upstream test, parameters, (conf, healing_enabled, heal, auto_confirm_after_ns))
+    ("FaultManagerNodeTest.DefaultDebounceConfig", "", (-1, False, 3, 0)),
+    ("FaultManagerNodeParameterTest.CustomConfirmationThreshold",
+     'storage_type: "memory"\nconfirmation_threshold: -5', (-5, False, 3, 0)),
+    ("FaultManagerNodeParameterTest.HealingEnabled",
+     'storage_type: "memory"\nhealing_enabled: true\nhealing_threshold: 5', (-1, True, 5, 0)),
+    ("FaultManagerNodeParameterTest.AutoConfirmAfterSec",
+     'storage_type: "memory"\nauto_confirm_after_sec: 15.0', (-1, False, 3, 15 * S)),
+)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("params", "expected"),
+    [pytest.param(p, e, id=name) for name, p, e in NODE_PARAMETERS],
+)
+def test_node_parameters_at_060(
+    tmp_path: Path, params: str, expected: tuple[int, bool, int, int]
+) -> None:
+    """The node parameter tests unchanged at bdcc4ed0, through the parameter file at 0.6.0."""
+    config, _ = node_config(tmp_path, params, R060)
+    debounce = FaultManager(config).resolver.global_config
+    got = (
+        debounce.confirmation_threshold,
+        debounce.healing_enabled,
+        debounce.healing_threshold,
+        config.auto_confirm_after_ns,
+    )
+    assert got == expected
+
+
+@pytest.mark.parametrize("backend", [MEMORY, SQLITE])
+def test_event_publishing_at_060(backend: str) -> None:
+    """FaultEventPublishingTest.NewFaultPublishesConfirmedEvent, ClearFaultPublishesClearedEvent,
+    ClearNonExistentFaultNoEvent and EventContainsFullFaultData (unchanged at bdcc4ed0)."""
+    manager = FaultManager(FaultManagerConfig(release=R060, storage_type=backend))
+    report(manager, 1 * S, "TEST_FAULT_1")
+    report(manager, 2 * S, "TEST_FAULT_3")
+    assert manager.clear(ClearRequest(t_ns=3 * S, fault_code="TEST_FAULT_3"))
+    assert not manager.clear(ClearRequest(t_ns=4 * S, fault_code="NON_EXISTENT_FAULT"))
+    report(manager, 5 * S, "FULL_DATA_TEST", CRITICAL, "/sensor/temperature")
+    shown = [
+        (e.event_type, e.fault.fault_code, e.fault.status, e.fault.severity, e.auto_cleared_codes)
+        for e in events_of(manager)
+    ]
+    assert shown == [
+        ("fault_confirmed", "TEST_FAULT_1", "CONFIRMED", ERROR, ()),
+        ("fault_confirmed", "TEST_FAULT_3", "CONFIRMED", ERROR, ()),
+        ("fault_cleared", "TEST_FAULT_3", "CLEARED", ERROR, ()),
+        ("fault_confirmed", "FULL_DATA_TEST", "CONFIRMED", CRITICAL, ()),
+    ]
+    full = events_of(manager)[-1].fault
+    assert (full.description, full.occurrence_count) == ("Test fault", 1)
+    assert full.reporting_sources == ("/sensor/temperature",)
