@@ -21,6 +21,26 @@ class Release:
         date: when that commit was made (the release date for a tagged release).
         max_fault_code_length: the longest ``fault_code`` the fault manager accepts
             (128 up to 505bc2d5; 256 from #591, in 0.7.0).
+        clamp_counter: the debounce counter is kept within ``[confirmation, healing]``
+            thresholds (49b2ec56, #484; the stored one per reporting band: b48c9052); without it
+            it only saturates at the int32 bounds.
+        latch_confirmed_healed: CONFIRMED and HEALED hold until the counter reaches the
+            opposite threshold (49b2ec56, #484); without it the status follows the counter.
+        backends_share_status_rule: the sqlite3 and in-memory storages decide a status the
+            same way (6920ba42); without it ``storage_type`` matters: SQLite checks only
+            confirmation on a FAILED and only healing on a PASSED.
+        occurrences_on_edges: ``occurrence_count`` counts a fault's creation and each
+            reactivation after a clear only (67bdb9cb); without it every FAILED counts.
+        passed_sets_last_occurred: a PASSED moves ``last_occurred`` as well as ``last_passed``
+            (true until d27fc3eb, #573).
+        reactivation_resets_first_occurred: a FAILED that reactivates a CLEARED fault sets
+            ``first_occurred`` again (67bdb9cb).
+        heal_event: a fault that becomes HEALED publishes ``fault_cleared`` (d27fc3eb).
+        sanitize_thresholds: ``confirmation_threshold >= 0`` becomes -1 and
+            ``healing_threshold < 0`` becomes 3, globally, per entity and on every report
+            (6920ba42, e9697424); without it 0 stays 0.
+        near_misses: FAILED reports that leave a fault unconfirmed are kept as a near-miss
+            series with ``near_miss.max_per_fault`` (aeb1e9d7, #629); 0.6.0 has neither.
     """
 
     name: str
@@ -28,6 +48,15 @@ class Release:
     date: str
     max_fault_code_length: int
     # -- the fault manager's storage and status rules (engine) --
+    clamp_counter: bool
+    latch_confirmed_healed: bool
+    backends_share_status_rule: bool
+    occurrences_on_edges: bool
+    passed_sets_last_occurred: bool
+    reactivation_resets_first_occurred: bool
+    heal_event: bool
+    sanitize_thresholds: bool
+    near_misses: bool
     # -- the bridges and the reporter (bridges, config) --
     # -- messages, freeze frames and black-box recordings (evidence, outputs, parity) --
 
@@ -42,6 +71,15 @@ RELEASES: dict[str, Release] = {
             date="2026-06-22",
             max_fault_code_length=128,
             # -- engine --
+            clamp_counter=False,
+            latch_confirmed_healed=False,
+            backends_share_status_rule=False,
+            occurrences_on_edges=False,
+            passed_sets_last_occurred=True,
+            reactivation_resets_first_occurred=False,
+            heal_event=False,
+            sanitize_thresholds=False,
+            near_misses=False,
             # -- bridges --
             # -- evidence --
         ),
@@ -52,6 +90,15 @@ RELEASES: dict[str, Release] = {
             date="2026-08-27",
             max_fault_code_length=256,
             # -- engine --
+            clamp_counter=True,
+            latch_confirmed_healed=True,
+            backends_share_status_rule=True,
+            occurrences_on_edges=True,
+            passed_sets_last_occurred=False,
+            reactivation_resets_first_occurred=True,
+            heal_event=True,
+            sanitize_thresholds=True,
+            near_misses=True,
             # -- bridges --
             # -- evidence --
         ),

@@ -33,8 +33,13 @@ def effective_config(
     """Every node's configuration as the replay applied it, plus the files it came from."""
     return {
         "files": list(files),
-        # The release is the report's own top-level key, not a fault_manager parameter.
-        "fault_manager": {k: v for k, v in _as_dict(_plain(manager)).items() if k != "release"},
+        # The release is the report's own top-level key, not a fault_manager parameter;
+        # storage_type changes nothing from 0.7.0 on, and the report's keys do not vary.
+        "fault_manager": {
+            k: v
+            for k, v in _as_dict(_plain(manager)).items()
+            if k not in ("release", "storage_type")
+        },
         "diagnostic_bridge": _plain(options.diagnostic),
         "action_status_bridge": _plain(options.action_status),
         "log_bridge": {"enabled": options.log_bridge, **_as_dict(_plain(options.log))},

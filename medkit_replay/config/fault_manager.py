@@ -14,7 +14,11 @@ from medkit_replay.config.nodes import located, values
 from medkit_replay.config.reader import INT64_MAX, ParameterReader, to_int32
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
-from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND
+from medkit_replay.engine.storage import (
+    DEFAULT_NEAR_MISS_BOUND,
+    DEFAULT_STORAGE_TYPE,
+    STORAGE_TYPES,
+)
 from medkit_replay.errors import ConfigError
 from medkit_replay.model import NS_PER_MS, NS_PER_SEC
 from medkit_replay.releases import default_release
@@ -38,15 +42,17 @@ def fault_manager_config(
     return located(params, lambda: _build(params, release or default_release()))
 
 
-def _int32(reader: ParameterReader, name: str, value: int, default: int) -> int:
+def _int32(reader: ParameterReader, name: str, value: int, default: int, *, sanitized: bool) -> int:
     """Upstream keeps both thresholds as ``static_cast<int32_t>`` of the negated int64.
 
     Negating INT64_MIN wraps to itself there, so its low 32 bits (0) are kept, as here. A
-    value that wraps past the sanitiser's band is replaced by the sanitiser, said in a warning.
+    value that wraps past the sanitiser's band is replaced by the sanitiser (when the release
+    has one), said in a warning.
     """
     wrapped = to_int32(value)
     if wrapped != value:
-        fixed = wrapped if (wrapped < 0 if default < 0 else wrapped >= 0) else default
+        in_band = wrapped < 0 if default < 0 else wrapped >= 0
+        fixed = wrapped if in_band or not sanitized else default
         reader.warn(f"{name} {value} is outside int32: upstream keeps {wrapped}; using {fixed}")
     return wrapped
 
@@ -61,9 +67,19 @@ def _auto_confirm_ns(seconds: float) -> int:
     return max(window, 1) if seconds > 0 else window
 
 
+def _storage_type(reader: ParameterReader) -> str:
+    """``storage_type`` as upstream's node takes it: an unknown name falls back to memory."""
+    name = reader.string("storage_type", DEFAULT_STORAGE_TYPE)
+    if name in STORAGE_TYPES:
+        return name
+    reader.warn(f"storage_type {name!r} is unknown; using 'memory' (upstream falls back to it)")
+    return "memory"
+
+
 def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     warnings = reader.warnings
+    sanitized = release.sanitize_thresholds
     conf = reader.integer("confirmation_threshold", -1)
     if conf > 0:
         reader.warn(
@@ -71,12 +87,12 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
         )
         conf = -conf
     in_int32 = to_int32(conf) == conf
-    conf = _int32(reader, "confirmation_threshold", conf, -1)
+    conf = _int32(reader, "confirmation_threshold", conf, -1, sanitized=sanitized)
     heal = reader.integer("healing_threshold", 3)
     if heal < 0:
         reader.warn(f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)")
         heal = -heal
-    heal = _int32(reader, "healing_threshold", heal, 3)
+    heal = _int32(reader, "healing_threshold", heal, 3, sanitized=sanitized)
     auto_sec = reader.double("auto_confirm_after_sec", 0.0)
     if auto_sec < 0:
         reader.warn(f"auto_confirm_after_sec {auto_sec} is negative; using 0.0")
@@ -99,18 +115,24 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
             f"{written.path}:{written.line}" if written is not None else "",
         )
         auto_sec = 0.0
-    near_miss = reader.integer("near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)
+    # A release without near misses does not declare the parameter: a value is ignored.
+    near_miss = (
+        reader.integer("near_miss.max_per_fault", DEFAULT_NEAR_MISS_BOUND)
+        if release.near_misses
+        else DEFAULT_NEAR_MISS_BOUND
+    )
     if near_miss < 0:
         reader.warn(
             f"near_miss.max_per_fault {near_miss} is negative; using {DEFAULT_NEAR_MISS_BOUND}"
         )
         near_miss = DEFAULT_NEAR_MISS_BOUND
+    storage_type = _storage_type(reader)  # upstream creates its storage here
     debounce = DebounceConfig(
         confirmation_threshold=conf,
         healing_enabled=reader.boolean("healing_enabled", False),
         healing_threshold=heal,
     )
-    if conf == 0 and in_int32:
+    if conf == 0 and in_int32 and sanitized:
         reader.warn("confirmation_threshold 0 is invalid; using -1")
 
     overrides: tuple[EntityOverride, ...] = ()
@@ -157,5 +179,6 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
         correlation=correlation,
         cleanup_interval_ns=cleanup_ms * NS_PER_MS,
         release=release,
+        storage_type=storage_type,
     )
     return config, warnings

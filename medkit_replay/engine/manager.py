@@ -9,8 +9,13 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, TypeAlias, TypeVar
 
 from medkit_replay.engine.correlation.engine import CorrelationEngine, severity_name
-from medkit_replay.engine.debounce import DebounceConfig, sanitize
-from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
+from medkit_replay.engine.debounce import DebounceConfig, sanitize, unchanged
+from medkit_replay.engine.storage import (
+    DEFAULT_NEAR_MISS_BOUND,
+    DEFAULT_STORAGE_TYPE,
+    FaultRecord,
+    FaultStorage,
+)
 from medkit_replay.engine.thresholds import EntityOverride, EntityThresholdResolver
 from medkit_replay.engine.validation import fault_code_error, report_error
 from medkit_replay.model import (
@@ -73,6 +78,9 @@ class FaultManagerConfig:
     cleanup_interval_ns: int = 5 * NS_PER_SEC
     release: Release = field(default_factory=default_release)
     """The upstream release modelled: which of the rules that changed between releases apply."""
+    storage_type: str = DEFAULT_STORAGE_TYPE
+    """Upstream's storage backend, "sqlite" or "memory": they decide a status differently at
+    0.6.0 (``Release.backends_share_status_rule``) and alike from 0.7.0."""
 
 
 class FaultManager:
@@ -81,10 +89,17 @@ class FaultManager:
     def __init__(self, config: FaultManagerConfig, output: EngineOutput | None = None) -> None:
         self.config = config
         self.output = output if output is not None else EngineOutput()
-        self.storage = FaultStorage(config.near_miss_bound)
+        release = config.release
+        self.storage = FaultStorage(config.near_miss_bound, release, config.storage_type)
         if config.auto_confirm_after_ns > 0:
             self.storage.track_prefailed()
-        self.resolver = EntityThresholdResolver(sanitize(config.debounce), config.entity_overrides)
+        # A release without the sanitiser uses thresholds as written (0 stays 0).
+        self._settle = sanitize if release.sanitize_thresholds else unchanged
+        self.resolver = EntityThresholdResolver(
+            self._settle(config.debounce),
+            config.entity_overrides,
+            sanitize_entries=release.sanitize_thresholds,
+        )
         self.correlation = (
             CorrelationEngine(config.correlation)
             if config.correlation is not None and config.correlation.enabled
@@ -150,6 +165,7 @@ class FaultManager:
         )
         report_row, transition_row = self.report_row, self.transition_row
         event, watcher = self._event, self.correlation_watcher
+        settle, heal_event = self._settle, self.config.release.heal_event
 
         def report_fields(
             t_ns: int,
@@ -179,7 +195,7 @@ class FaultManager:
                 return False
             config = configs.get(source_id)
             if config is None:
-                config = sanitize(resolver.resolve(source_id))
+                config = settle(resolver.resolve(source_id))
                 if len(configs) < _MAX_CACHED_SOURCES:
                     configs[source_id] = config
             output.reports_accepted += 1
@@ -224,7 +240,7 @@ class FaultManager:
             )  # fmt: skip
             if kind is not None:
                 event(t_ns, kind, fault)
-            if not is_new and before != "HEALED" and after == "HEALED":
+            if heal_event and after == "HEALED" and not is_new and before != "HEALED":
                 event(t_ns, "fault_cleared", fault)
             return True
 

@@ -7,14 +7,25 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-from medkit_replay.engine.debounce import DebounceConfig, clamp, compute_status
+from medkit_replay.engine.debounce import (
+    DebounceConfig,
+    counter_step,
+    status_rule,
+)
 from medkit_replay.model import NearMiss, Status
+from medkit_replay.releases import Release, default_release
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 CRITICAL = 3
 FAILED = 0
 UINT32_MAX = 2**32 - 1
 DEFAULT_NEAR_MISS_BOUND = 200
+STORAGE_TYPES = ("memory", "sqlite")
+DEFAULT_STORAGE_TYPE = "sqlite"
 
 
 @dataclass(slots=True)
@@ -53,12 +64,34 @@ ReportOutcome = tuple["Status | None", "Status | None", bool]
 
 
 class FaultStorage:
-    """Upstream's InMemoryFaultStorage: one record per fault code, never evicted."""
+    """Upstream's fault storage of one release: one record per fault code, never evicted.
 
-    def __init__(self, near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND) -> None:
+    ``storage_type`` ("memory" or "sqlite", upstream's parameter) matters only for a release
+    whose two backends decide a status differently (0.6.0); every rule that differs between
+    releases is picked here, once, from the release's fields.
+    """
+
+    def __init__(
+        self,
+        near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND,
+        release: Release | None = None,
+        storage_type: str = DEFAULT_STORAGE_TYPE,
+    ) -> None:
         self.faults: dict[str, FaultRecord] = {}
         self.near_misses: dict[str, list[NearMiss]] = {}
         self.near_miss_bound = near_miss_bound
+        rules = release or default_release()
+        shared = rules.backends_share_status_rule or storage_type != "sqlite"
+        latch = rules.latch_confirmed_healed
+        self._after_failed = status_rule(confirm=True, heal=shared, latch=latch)
+        self._after_passed = status_rule(confirm=shared, heal=True, latch=latch)
+        self._step = counter_step(in_band=rules.clamp_counter)
+        self._count_every_failed = not rules.occurrences_on_edges
+        self._passed_dates = rules.passed_sets_last_occurred
+        self._reset_first = rules.reactivation_resets_first_occurred
+        self.record_near_miss: Callable[[FaultRecord, DebounceConfig, int, str, int], None] = (
+            self._near_miss if rules.near_misses else _no_near_miss
+        )
         # PREFAILED faults by last FAILED time, for time-based confirmation: a heap of
         # (last_failed_ns, code) and each code's live entry. An entry may be stale (the fault
         # left PREFAILED, or failed again later); it is checked when it comes out.
@@ -126,7 +159,7 @@ class FaultStorage:
         if fault is None:
             if not failed:
                 return (None, None, False)
-            status = "CONFIRMED" if crit_hit else compute_status(-1, None, config)
+            status = "CONFIRMED" if crit_hit else self._after_failed(-1, None, config)
             assert status is not None  # counter -1 always yields a status
             fault = FaultRecord(
                 fault_code=fault_code,
@@ -139,7 +172,7 @@ class FaultStorage:
                 sources={source_id},
             )
             self.faults[fault_code] = fault
-            self._near_miss(fault, config, severity, source_id, t_ns)
+            self.record_near_miss(fault, config, severity, source_id, t_ns)
             if self.tracks_prefailed:
                 self.watch(fault)
             return (None, status, True)
@@ -149,37 +182,44 @@ class FaultStorage:
             if not failed:
                 return (before, before, False)
             fault.counter = -1
-            fault.first_occurred_ns = fault.last_occurred_ns = fault.last_failed_ns = t_ns
+            if self._reset_first:
+                fault.first_occurred_ns = t_ns
+            fault.last_occurred_ns = fault.last_failed_ns = t_ns
             fault.add_source(source_id)
             fault.occurrence_count = min(fault.occurrence_count + 1, UINT32_MAX)
             fault.severity = max(fault.severity, severity)
             if description:
                 fault.description = description
-            status = "CONFIRMED" if crit_hit else compute_status(-1, "CLEARED", config)
+            status = "CONFIRMED" if crit_hit else self._after_failed(-1, "CLEARED", config)
             assert status is not None
             fault.status = status
-            self._near_miss(fault, config, severity, source_id, t_ns)
+            self.record_near_miss(fault, config, severity, source_id, t_ns)
             if self.tracks_prefailed:
                 self.watch(fault)
             return (before, status, True)
 
-        fault.counter = clamp(fault.counter, config)
         if failed:
             fault.last_occurred_ns = fault.last_failed_ns = t_ns
-            fault.counter = clamp(fault.counter - 1, config)
+            fault.counter = self._step(fault.counter, -1, config)
+            if self._count_every_failed:
+                fault.occurrence_count = min(fault.occurrence_count + 1, UINT32_MAX)
             fault.add_source(source_id)
             fault.severity = max(fault.severity, severity)
             if description:
                 fault.description = description
-            new_status = "CONFIRMED" if crit_hit else compute_status(fault.counter, before, config)
+            new_status = (
+                "CONFIRMED" if crit_hit else self._after_failed(fault.counter, before, config)
+            )
         else:
             fault.last_passed_ns = t_ns
-            fault.counter = clamp(fault.counter + 1, config)
-            new_status = compute_status(fault.counter, before, config)
+            if self._passed_dates:
+                fault.last_occurred_ns = t_ns
+            fault.counter = self._step(fault.counter, 1, config)
+            new_status = self._after_passed(fault.counter, before, config)
         assert new_status is not None  # an existing fault always has a status to keep
         fault.status = new_status
         if failed:
-            self._near_miss(fault, config, severity, source_id, t_ns)
+            self.record_near_miss(fault, config, severity, source_id, t_ns)
         if self.tracks_prefailed:
             self.watch(fault)
         return (before, new_status, False)
@@ -233,3 +273,9 @@ class FaultStorage:
         )
         if self.near_miss_bound > 0 and len(series) > self.near_miss_bound:
             del series[0]
+
+
+def _no_near_miss(
+    fault: FaultRecord, config: DebounceConfig, severity: int, source_id: str, t_ns: int
+) -> None:
+    """A release without near misses keeps none."""

@@ -29,6 +29,8 @@ from tests.engine.upstream_support import (
 if TYPE_CHECKING:
     from pathlib import Path
 
+    from medkit_replay.releases import Release
+
 S = NS_PER_SEC
 T0 = 1_790_000_000 * S  # a 2026 bag time
 
@@ -57,12 +59,14 @@ def report(
 # -- node parameters (N-01..N-12) ---------------------------------------------------------------
 
 
-def node_config(tmp_path: Path, params: str = "") -> tuple[FaultManagerConfig, list[str]]:
+def node_config(
+    tmp_path: Path, params: str = "", release: Release | None = None
+) -> tuple[FaultManagerConfig, list[str]]:
     """The FaultManagerConfig of a parameter file whose fault_manager holds ``params``."""
     body = "".join(f"    {line}\n" for line in params.splitlines()) or "    {}\n"
     path = tmp_path / "params.yaml"
     path.write_text("fault_manager:\n  ros__parameters:\n" + body)
-    return fault_manager_config(load_parameters([path]).node("fault_manager"))
+    return fault_manager_config(load_parameters([path]).node("fault_manager"), release)
 
 
 def confirming_report(config: FaultManagerConfig) -> int:

@@ -13,7 +13,12 @@ from typing import Literal, TypedDict, TypeVar, Unpack
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManager, FaultManagerConfig
 from medkit_replay.engine.queries import list_faults
-from medkit_replay.engine.storage import DEFAULT_NEAR_MISS_BOUND, FaultRecord, FaultStorage
+from medkit_replay.engine.storage import (
+    DEFAULT_NEAR_MISS_BOUND,
+    DEFAULT_STORAGE_TYPE,
+    FaultRecord,
+    FaultStorage,
+)
 from medkit_replay.model import (
     NS_PER_SEC,
     ClearRequest,
@@ -22,6 +27,7 @@ from medkit_replay.model import (
     ReportRequest,
     Status,
 )
+from medkit_replay.releases import Release, default_release
 
 INFO, WARN, ERROR, CRITICAL = 0, 1, 2, 3
 FAILED, PASSED = 0, 1
@@ -201,6 +207,7 @@ class Case:
     ``config`` is the storage-level config (passed unsanitised with every report). The node run
     uses ``node_config`` when given, else a FaultManagerConfig around ``config`` (which the
     manager sanitises); ``node=False`` skips it for storage-only configs (crit off).
+    ``release`` and ``storage_type`` choose the upstream rules both runs apply.
     """
 
     sid: str
@@ -210,6 +217,8 @@ class Case:
     node: bool = True
     node_config: FaultManagerConfig | None = None
     near_miss_bound: int = DEFAULT_NEAR_MISS_BOUND
+    release: Release = field(default_factory=default_release)
+    storage_type: str = DEFAULT_STORAGE_TYPE
 
     @property
     def test_id(self) -> str:
@@ -277,7 +286,7 @@ def _where(case: Case, layer: str, index: int, step: Step) -> str:
 
 def run_storage(case: Case) -> FaultStorage:
     """Replay a case against FaultStorage with its explicit per-report configs."""
-    storage = FaultStorage(case.near_miss_bound)
+    storage = FaultStorage(case.near_miss_bound, case.release, case.storage_type)
     for index, (step, t_ns) in enumerate(zip(case.steps, schedule(case.steps), strict=True)):
         where = _where(case, "storage", index, step)
         returned: bool | None = None
@@ -316,7 +325,12 @@ def node_config_of(case: Case) -> FaultManagerConfig:
     """The FaultManagerConfig a case's node run uses."""
     if case.node_config is not None:
         return case.node_config
-    return FaultManagerConfig(debounce=case.config, near_miss_bound=case.near_miss_bound)
+    return FaultManagerConfig(
+        debounce=case.config,
+        near_miss_bound=case.near_miss_bound,
+        release=case.release,
+        storage_type=case.storage_type,
+    )
 
 
 def run_node(case: Case) -> FaultManager:
