@@ -25,6 +25,7 @@ from medkit_replay.checks.budget import (
     seconds_text,
 )
 from medkit_replay.checks.facts import Facts, Offender
+from medkit_replay.releases import DEFAULT_RELEASE
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
@@ -61,6 +62,8 @@ class CheckRun:
     """Why the run was not checked (one line): its recording could not be replayed, or
     nothing in it reached the fault manager (``empty``); then it has no verdicts and fails."""
     empty: bool = False
+    upstream_release: str = DEFAULT_RELEASE
+    """The ros2_medkit release the run was replayed as (``medkit_replay.upstream_release``)."""
 
     @property
     def passed(self) -> bool:
@@ -87,6 +90,7 @@ def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun
             warnings=result.warnings,
             error=f"{label}: {empty}",
             empty=True,
+            upstream_release=result.upstream_release,
         )
     return CheckRun(
         label=label,
@@ -94,6 +98,7 @@ def check_run(budget: Budget, result: Result, inputs: Sequence[str]) -> CheckRun
         budget=budget,
         verdicts=evaluate(budget, result),
         warnings=result.warnings,
+        upstream_release=result.upstream_release,
     )
 
 
@@ -116,10 +121,18 @@ def failed_rules(budget: Budget, result: Result) -> tuple[str, ...]:
     return tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
 
 
-def unreadable_run(budget: Budget, inputs: Sequence[str], error: str) -> CheckRun:
-    """A run whose recording could not be replayed: no verdicts, failed, saying why."""
+def unreadable_run(
+    budget: Budget, inputs: Sequence[str], error: str, release: str = DEFAULT_RELEASE
+) -> CheckRun:
+    """A run whose recording could not be replayed (as ``release``): no verdicts, failed,
+    saying why."""
     return CheckRun(
-        label=" + ".join(inputs), inputs=tuple(inputs), budget=budget, verdicts=(), error=error
+        label=" + ".join(inputs),
+        inputs=tuple(inputs),
+        budget=budget,
+        verdicts=(),
+        error=error,
+        upstream_release=release,
     )
 
 

@@ -12,6 +12,7 @@ import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING
 
 from medkit_replay.outputs.atomic import write_bytes_atomic
+from medkit_replay.result import RELEASE_PARAMETER
 from medkit_replay.text import xml_text
 from medkit_replay.version import __version__
 
@@ -102,7 +103,11 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
             },
         )
         properties = ET.SubElement(suite, "properties")
-        entries = [("budget", run.budget.path), ("medkit_replay_version", __version__)]
+        entries = [
+            ("budget", run.budget.path),
+            ("medkit_replay_version", __version__),
+            (RELEASE_PARAMETER, run.upstream_release),
+        ]
         entries += [("input", path) for path in run.inputs]
         for name, value in entries:
             ET.SubElement(properties, "property", {"name": name, "value": xml_text(value)})

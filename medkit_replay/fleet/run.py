@@ -56,6 +56,8 @@ class RunSummary:
         budget_failures: the names of the budget's rules that did not hold, in budget order;
             or one line saying what was missing when nothing was replayed.
         error: why the run failed (one line), None when it did not.
+        upstream_release: the ros2_medkit release the run was replayed as (None when the
+            run failed).
     """
 
     path: str
@@ -71,6 +73,7 @@ class RunSummary:
     budget: str | None = None
     budget_failures: tuple[str, ...] = ()
     error: str | None = None
+    upstream_release: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -142,6 +145,7 @@ def summarize(path: str, kind: str, result: Result) -> RunSummary:
         confirmed=tuple(first_confirmed.items()),
         heals=tuple(heals),
         warnings=len(result.warnings),
+        upstream_release=result.upstream_release,
     )
 
 
