@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from medkit_replay import model
+from medkit_replay.releases import DEFAULT_RELEASE, RELEASES
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -75,6 +76,17 @@ _FED = ("diagnostic_bridge", "action_status_bridge", "log_bridge", "script")
 
 def _count(number: int, word: str) -> str:
     return f"{number:,} {word}" + ("" if number == 1 else "s")
+
+
+RELEASE_PARAMETER = "medkit_replay.upstream_release"
+"""The parameter that chooses the ros2_medkit release modelled (``config/release.py``)."""
+
+
+def release_line(names: Sequence[str]) -> str:
+    """What every summary's header says of the release(s) modelled, and how to choose another."""
+    known = ", ".join(RELEASES)
+    named = " and ".join(name for name in RELEASES if name in names)
+    return f"ros2_medkit {named} modelled ({RELEASE_PARAMETER}: {known})"
 
 
 LOG_BRIDGE_HINT = "medkit_replay: {enable_log_bridge: true}"
@@ -215,6 +227,8 @@ class Result:
     """What the live fault manager would have concluded from the inputs."""
 
     tool_version: str
+    upstream_release: str = DEFAULT_RELEASE
+    """The ros2_medkit release modelled (``medkit_replay.upstream_release``), set by the replay."""
     inputs: tuple[InputSummary, ...]
     faults: tuple[FaultSnapshot, ...]
     events: Sequence[FaultEvent]

@@ -38,6 +38,7 @@ def test_json_to_stdout_keeps_stdout_pure(capsys: pytest.CaptureFixture[str]) ->
     assert list(report) == [
         "schema",
         "tool_version",
+        "upstream_release",
         "inputs",
         "faults",
         "events",

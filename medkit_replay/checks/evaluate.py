@@ -26,6 +26,7 @@ from medkit_replay.checks.budget import (
 )
 from medkit_replay.checks.facts import Facts, Offender
 from medkit_replay.model import strict_failure
+from medkit_replay.releases import DEFAULT_RELEASE
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
@@ -67,6 +68,8 @@ class CheckRun:
     """What damage cost, in total per input that lost anything (each also in ``warnings``)."""
     strict: bool = False
     """Damage fails the run (``--strict``)."""
+    upstream_release: str = DEFAULT_RELEASE
+    """The ros2_medkit release the run was replayed as (``medkit_replay.upstream_release``)."""
 
     @property
     def passed(self) -> bool:
@@ -103,6 +106,7 @@ def check_run(
             empty=True,
             losses=result.losses_by_input(),
             strict=strict,
+            upstream_release=result.upstream_release,
         )
     return CheckRun(
         label=label,
@@ -112,6 +116,7 @@ def check_run(
         warnings=result.warnings,
         losses=result.losses_by_input(),
         strict=strict,
+        upstream_release=result.upstream_release,
     )
 
 
@@ -134,10 +139,18 @@ def failed_rules(budget: Budget, result: Result) -> tuple[str, ...]:
     return tuple(v.rule.name for v in evaluate(budget, result) if not v.passed)
 
 
-def unreadable_run(budget: Budget, inputs: Sequence[str], error: str) -> CheckRun:
-    """A run whose recording could not be replayed: no verdicts, failed, saying why."""
+def unreadable_run(
+    budget: Budget, inputs: Sequence[str], error: str, release: str = DEFAULT_RELEASE
+) -> CheckRun:
+    """A run whose recording could not be replayed (as ``release``): no verdicts, failed,
+    saying why."""
     return CheckRun(
-        label=" + ".join(inputs), inputs=tuple(inputs), budget=budget, verdicts=(), error=error
+        label=" + ".join(inputs),
+        inputs=tuple(inputs),
+        budget=budget,
+        verdicts=(),
+        error=error,
+        upstream_release=release,
     )
 
 

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.model import total_loss
 from medkit_replay.outputs.atomic import write_bytes_atomic
+from medkit_replay.result import RELEASE_PARAMETER
 from medkit_replay.text import xml_text
 from medkit_replay.version import __version__
 
@@ -144,7 +145,11 @@ def junit_element(runs: Sequence[CheckRun]) -> ET.Element:
             },
         )
         properties = ET.SubElement(suite, "properties")
-        entries = [("budget", run.budget.path), ("medkit_replay_version", __version__)]
+        entries = [
+            ("budget", run.budget.path),
+            ("medkit_replay_version", __version__),
+            (RELEASE_PARAMETER, run.upstream_release),
+        ]
         entries += [("input", path) for path in run.inputs]
         entries += _loss_properties(run)
         for name, value in entries:

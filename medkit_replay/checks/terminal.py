@@ -14,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.model import read_in_part
+from medkit_replay.result import release_line
 from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
@@ -139,6 +140,11 @@ def print_renderables(renderables: Sequence[RenderableType], stream: TextIO) -> 
         for renderable in renderables:
             console.print(renderable)
     stream.write("\n".join(line.rstrip(" ") for line in capture.get().split("\n")))
+
+
+def print_release(release: str, stream: TextIO) -> None:
+    """The check's first line: the ros2_medkit release the runs are replayed as."""
+    print_renderables([Text(release_line([release]), style="dim")], stream)
 
 
 def print_run(run: CheckRun, stream: TextIO) -> None:

@@ -90,12 +90,19 @@ def check(
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.checks.budget_file import load_budget  # noqa: PLC0415
     from medkit_replay.checks.junit import write_junit  # noqa: PLC0415
-    from medkit_replay.checks.terminal import print_conclusion, print_run  # noqa: PLC0415
+    from medkit_replay.checks.terminal import (  # noqa: PLC0415
+        print_conclusion,
+        print_release,
+        print_run,
+    )
+    from medkit_replay.config.params import load_parameters  # noqa: PLC0415
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.config.release import release_of  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
     budget = load_budget(budget_path, allow_empty=allow_empty)  # fails before any replay
     protected = config_files(configs)  # so does a bad config
+    release = release_of(load_parameters(configs)).name
     for path in local_paths(inputs):
         if not os.path.lexists(path):
             raise InputError("input not found", path=str(path))
@@ -106,8 +113,10 @@ def check(
     refuse_overlap([*local_paths(inputs), *protected, budget_path], outputs)
     groups = [list(inputs)] if merge else [[path] for path in inputs]
     runs: list[CheckRun] = []
+    with standard_output("the check's results"):
+        print_release(release, sys.stdout)
     for group in groups:
-        run = _check_group(budget, group, configs, strict=strict)
+        run = _check_group(budget, group, configs, release, strict=strict)
         runs.append(run)
         with standard_output("the check's results"):
             print_run(run, sys.stdout)
@@ -127,7 +136,12 @@ def check(
 
 
 def _check_group(
-    budget: Budget, group: list[Path | str], configs: tuple[Path, ...], *, strict: bool = False
+    budget: Budget,
+    group: list[Path | str],
+    configs: tuple[Path, ...],
+    release: str,
+    *,
+    strict: bool = False,
 ) -> CheckRun:
     """Replay one run and check it; a recording that cannot be read is a failed run saying why
     (a config problem is still the whole command's, exit 2)."""
@@ -153,7 +167,7 @@ def _check_group(
     except Exception as err:  # whatever the recording makes the replay raise: it failed
         text = " ".join(str(err).split())
         error = f"{' + '.join(labels)}: {type(err).__name__}" + (f": {text}" if text else "")
-    return unreadable_run(budget, labels, " ".join(error.split()))
+    return unreadable_run(budget, labels, " ".join(error.split()), release)
 
 
 def _github(runs: list[CheckRun]) -> None:

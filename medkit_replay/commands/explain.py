@@ -18,7 +18,8 @@ from medkit_replay.errors import MedkitReplayError
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.text import clip, printable
 
-MAX_CODE_SHOWN = 200
+MAX_CODE_SHOWN = 256
+"""Characters of a code named in an error (the longest valid code, at 0.7.0)."""
 
 
 class UnknownCodeError(MedkitReplayError):

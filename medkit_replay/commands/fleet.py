@@ -83,7 +83,9 @@ def fleet(
       medkit-replay fleet s3://fleet-bags/2026-03/ --dask tcp://scheduler:8786
     """
     # Imported here, so that --help and the other commands start without them.
+    from medkit_replay.config.params import load_parameters  # noqa: PLC0415
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
+    from medkit_replay.config.release import release_of  # noqa: PLC0415
     from medkit_replay.fleet.cluster import dask_client_type, run_on_dask  # noqa: PLC0415
     from medkit_replay.fleet.discover import discover  # noqa: PLC0415
     from medkit_replay.fleet.workers import run_all  # noqa: PLC0415
@@ -96,6 +98,7 @@ def fleet(
     if dask_address is not None:
         dask_client_type()  # a missing extra is said before anything runs
     config_paths = config_files(configs)  # a bad config stops the fleet before it starts
+    release = release_of(load_parameters(configs)).name
     parsed_budget = None
     if budget is not None:
         from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
@@ -146,7 +149,7 @@ def fleet(
         ) from None
     if not quiet:
         with standard_output("the fleet summary"):
-            print_summary(runs, sys.stdout, out_dir)
+            print_summary(runs, sys.stdout, out_dir, release)
     failed = any(not run.ok or run.budget == "fail" for run in runs)
     if strict and say_damage(run.lost for run in runs if run.lost is not None):
         failed = True

@@ -100,6 +100,8 @@ class ReportDiff:
     differences: tuple[Difference, ...]
     origin_ns: int | None = None
     """Start of the baseline recording: the human output shows times as offsets from it."""
+    warnings: tuple[str, ...] = ()
+    """What the reader should know before trusting the differences (reports of two releases)."""
 
     @property
     def equal(self) -> bool:
@@ -123,6 +125,7 @@ class ReportDiff:
             "equal": self.equal,
             "counts": self.counts(),
             "differences": [d.to_json() for d in self.differences],
+            **({"warnings": list(self.warnings)} if self.warnings else {}),
         }
 
 
@@ -169,6 +172,8 @@ class _Report:
             self.transitions_by_code.setdefault(code, []).append(transition)
         self.cluster_by_id = {str(c["cluster_id"]): c for c in self.clusters}
         self.origin_ns = _origin(report)
+        release = report.get("upstream_release")  # absent from reports made before it existed
+        self.release = release if isinstance(release, str) else None
 
     def _objects(
         self,
@@ -283,7 +288,9 @@ def diff_reports(
       ``cluster_removed``), or whose rule, representative or members changed
       (``cluster_changed``).
 
-    Descriptions, input paths, tool versions, warnings, requests and summaries are not compared.
+    Descriptions, input paths, tool versions, warnings, requests and summaries are not compared;
+    reports naming different ``upstream_release`` values get one warning
+    (``ReportDiff.warnings``).
 
     Args:
         baseline: the reference report.
@@ -313,6 +320,18 @@ def diff_reports(
         time_tolerance_ns=time_tolerance_ns,
         differences=tuple(differences),
         origin_ns=old.origin_ns if old.origin_ns is not None else new.origin_ns,
+        warnings=_release_warnings(old.release, new.release),
+    )
+
+
+def _release_warnings(baseline: str | None, current: str | None) -> tuple[str, ...]:
+    """One warning when the reports name different ros2_medkit releases (a report made before
+    ``upstream_release`` existed names none, and is compared as it is)."""
+    if baseline is None or current is None or baseline == current:
+        return ()
+    return (
+        f"warning: the reports model different ros2_medkit releases (baseline {_short(baseline)}, "
+        f"current {_short(current)}): some differences may be the release's, not the robot's",
     )
 
 

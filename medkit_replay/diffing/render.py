@@ -170,6 +170,10 @@ def diff_renderable(diff: ReportDiff) -> Group:
         )
         for label, name in (("baseline: ", diff.baseline_name), ("current:  ", diff.current_name))
     ]
+    parts += [  # one line each, however narrow the output
+        Text(_show(warning), style="bold yellow", no_wrap=True, overflow="ignore")
+        for warning in diff.warnings
+    ]
     parts.append(_headline(diff))
     if diff.equal:
         return Group(*parts)

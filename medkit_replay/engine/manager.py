@@ -166,6 +166,7 @@ class FaultManager:
         report_row, transition_row = self.report_row, self.transition_row
         event, watcher = self._event, self.correlation_watcher
         settle, heal_event = self._settle, self.config.release.heal_event
+        max_length = self.config.release.max_fault_code_length
 
         def report_fields(
             t_ns: int,
@@ -180,10 +181,12 @@ class FaultManager:
             if fault_code in valid_codes:  # only the checks that do not depend on the code
                 valid = source_id and (event_type == 1 or (event_type == 0 and severity <= 3))
                 reason = (
-                    None if valid else report_error(fault_code, event_type, severity, source_id)
+                    None
+                    if valid
+                    else report_error(fault_code, event_type, severity, source_id, max_length)
                 )
             else:
-                reason = report_error(fault_code, event_type, severity, source_id)
+                reason = report_error(fault_code, event_type, severity, source_id, max_length)
                 if reason is None and len(valid_codes) < _MAX_CACHED_SOURCES:
                     valid_codes.add(fault_code)
             if reason is not None:
@@ -251,7 +254,7 @@ class FaultManager:
     def clear(self, request: ClearRequest) -> bool:
         """Handle one ClearFault request; returns the response's ``success``."""
         code = request.fault_code
-        reason = fault_code_error(code)
+        reason = fault_code_error(code, self.config.release.max_fault_code_length)
         if reason is not None:
             self._clear_record(request, success=False, message=reason, auto=())
             return False

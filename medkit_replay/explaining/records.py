@@ -24,6 +24,7 @@ def story_record(story: Story) -> dict[str, JSON]:
     return {
         "schema": EXPLAIN_SCHEMA,
         "tool_version": __version__,
+        "upstream_release": story.upstream_release,
         "fault_code": story.fault_code,
         "recording": {
             "inputs": list(story.inputs),

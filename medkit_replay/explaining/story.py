@@ -29,6 +29,8 @@ class Story:
     end_ns: int
     at_ns: int | None
     inputs: tuple[str, ...]
+    upstream_release: str
+    """The ros2_medkit release the story was replayed as."""
     header: tuple[Line, ...]
     summary: dict[str, JSON]
     entries: tuple[Entry, ...]
@@ -275,6 +277,7 @@ def build_story(result: Result, trace: FaultTrace) -> Story:
         end_ns=end_ns,
         at_ns=at_ns,
         inputs=builder.inputs,
+        upstream_release=result.upstream_release,
         header=tuple(header),
         summary=summary,
         entries=tuple(entries),

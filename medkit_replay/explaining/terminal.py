@@ -15,6 +15,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.outputs.console import draw, literal_console, plain_text
+from medkit_replay.result import release_line
 from medkit_replay.text import clip, printable, seconds
 
 if TYPE_CHECKING:
@@ -91,6 +92,7 @@ def story_renderable(story: Story) -> Group:
     parts: list[RenderableType] = [head]
     for path in story.inputs:
         parts.append(Text(f"  {printable(clip(path, MAX_PART))}", style="dim"))
+    parts.append(Text(release_line([story.upstream_release]), style="dim"))
     if story.at_ns is not None:
         parts.append(
             Text(f"stopped at {seconds(story.at_ns - story.origin_ns)} s (--at)", style="bold")

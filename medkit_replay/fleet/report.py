@@ -240,6 +240,7 @@ def _runs_rows(frame: pd.DataFrame) -> list[str]:
         cells = [
             _text_cell(record["path"]),
             _text_cell(record["kind"]),
+            _text_cell(record["upstream_release"]),
             _number_cell(record["span_s"], 3),
             _number_cell(record["messages"]),
             _number_cell(record["confirmed"]),
@@ -287,6 +288,7 @@ def render_html(
         [
             "path",
             "kind",
+            "ros2_medkit",
             "span (s)",
             "messages",
             "confirmed",

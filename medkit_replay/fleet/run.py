@@ -59,6 +59,8 @@ class RunSummary:
         error: why the run failed (one line), None when it did not.
         lost: what damage cost the recording, in total (None: nothing was lost); not a column
             of the tables, ``--strict`` fails the fleet on it.
+        upstream_release: the ros2_medkit release the run was replayed as (None when the
+            run failed).
     """
 
     path: str
@@ -75,6 +77,7 @@ class RunSummary:
     budget_failures: tuple[str, ...] = ()
     error: str | None = None
     lost: Loss | None = None
+    upstream_release: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -147,6 +150,7 @@ def summarize(path: str, kind: str, result: Result) -> RunSummary:
         heals=tuple(heals),
         warnings=len(result.warnings),
         lost=total_loss(result.losses, path) if result.losses else None,
+        upstream_release=result.upstream_release,
     )
 
 

@@ -23,6 +23,7 @@ NS_PER_S = 1e9
 RUN_COLUMNS: dict[str, str] = {
     "path": "string",
     "kind": "string",
+    "upstream_release": "string",
     "start_ns": "Int64",
     "span_s": "Float64",
     "messages": "Int64",
@@ -60,6 +61,7 @@ def _run_record(run: RunSummary) -> dict[str, object]:
     return {
         "path": run.path,
         "kind": run.kind,
+        "upstream_release": run.upstream_release,
         "start_ns": run.start_ns,
         "span_s": _seconds(run.span_ns),
         "messages": run.messages,

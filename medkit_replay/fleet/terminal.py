@@ -18,6 +18,8 @@ from medkit_replay.fleet.progress import FleetProgress, fleet_progress
 from medkit_replay.fleet.report import FILES, is_missing
 from medkit_replay.fleet.stats import codes_table, overview
 from medkit_replay.outputs.console import literal_console, plain_text
+from medkit_replay.releases import DEFAULT_RELEASE
+from medkit_replay.result import release_line
 from medkit_replay.text import printable
 
 if TYPE_CHECKING:
@@ -50,8 +52,11 @@ def _indented(text: Text) -> Padding:
     return Padding(text, (0, 0, 0, 2))
 
 
-def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> list[RenderableType]:
-    """What the terminal summary shows, as rich renderables."""
+def summary_renderables(
+    runs: Sequence[RunSummary], out_dir: Path | None, release: str = DEFAULT_RELEASE
+) -> list[RenderableType]:
+    """What the terminal summary shows, as rich renderables; ``release``: the ros2_medkit
+    release every run is replayed as."""
     counts = overview(runs)
     head = Text()
     head.append("fleet: ", style="bold")
@@ -62,7 +67,7 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
         f"; {_plural(counts['messages'], 'message')} read; "
         f"{counts['runs_with_confirmed']:,} with a confirmed fault"
     )
-    parts: list[RenderableType] = [head]
+    parts: list[RenderableType] = [head, Text(release_line([release]), style="dim")]
     verdicts = {k.removeprefix("budget_"): v for k, v in counts.items() if k.startswith("budget_")}
     if verdicts:
         line = Text("budget: ", style="bold")
@@ -147,15 +152,22 @@ def summary_renderables(runs: Sequence[RunSummary], out_dir: Path | None) -> lis
     return parts
 
 
-def render_summary(runs: Sequence[RunSummary], out_dir: Path | None = None) -> str:
+def render_summary(
+    runs: Sequence[RunSummary], out_dir: Path | None = None, release: str = DEFAULT_RELEASE
+) -> str:
     """The terminal summary as plain text at 80 columns (what a file or a pipe receives)."""
-    return plain_text(Group(*summary_renderables(runs, out_dir)), 80)
+    return plain_text(Group(*summary_renderables(runs, out_dir, release)), 80)
 
 
-def print_summary(runs: Sequence[RunSummary], stream: TextIO, out_dir: Path | None = None) -> None:
+def print_summary(
+    runs: Sequence[RunSummary],
+    stream: TextIO,
+    out_dir: Path | None = None,
+    release: str = DEFAULT_RELEASE,
+) -> None:
     """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
     console = literal_console(stream)
     if console.is_terminal:
-        console.print(Group(*summary_renderables(runs, out_dir)))
+        console.print(Group(*summary_renderables(runs, out_dir, release)))
         return
-    stream.write(render_summary(runs, out_dir))
+    stream.write(render_summary(runs, out_dir, release))

@@ -37,7 +37,7 @@ from medkit_replay.outputs.html_timeline import (
     build_lanes,
     page_data,
 )
-from medkit_replay.result import EVENT_KINDS, STATUSES
+from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
 if TYPE_CHECKING:
@@ -155,6 +155,7 @@ def _header(result: Result, span: Span) -> str:
     return (
         f'<header class="top"><h1>medkit-replay report</h1><p class="sub">'
         f'<span class="names">{esc(names)}</span> · medkit-replay {esc(result.tool_version)}</p>'
+        f'<p class="release">{esc(release_line([result.upstream_release]))}</p>'
         f'<p class="span-line">Recording: {esc(recorded)}</p></header>{warn_block}'
         f'<section class="cards">{card_html}</section>'
         f'<section id="inputs"><h2>Inputs</h2><table class="inputs"><thead><tr><th>path</th>'

@@ -149,6 +149,7 @@ def _sections(result: Result) -> list[tuple[str, object]]:
     return [
         ("schema", REPORT_SCHEMA),
         ("tool_version", result.tool_version),
+        ("upstream_release", result.upstream_release),
         ("inputs", [input_dict(i) for i in result.inputs]),
         ("faults", [fault_dict(f) for f in result.faults]),
         ("events", _Rows(_EVENTS, result.events)),

@@ -23,6 +23,7 @@ from rich.text import Text
 
 from medkit_replay.model import read_in_part
 from medkit_replay.outputs.console import draw, drawn, literal_console, plain_text
+from medkit_replay.result import release_line
 from medkit_replay.text import WARNING_CAP, clip, printable, seconds, severity_name
 
 if TYPE_CHECKING:
@@ -49,8 +50,9 @@ MAX_ROWS = 200
 MAX_SOURCES = 3
 MAX_DESCRIPTION = 100
 """Characters of a description shown; the reports have it whole."""
-MAX_TEXT = 200
-"""Characters of a source, a code, a cluster id shown (a valid fault code has at most 128)."""
+MAX_TEXT = 256
+"""Characters of a source, a code, a cluster id shown (a valid fault code has at most 256, at
+0.7.0; 128 at 0.6.0)."""
 MAX_WARNING = WARNING_CAP
 """Characters of a warning (or a path) shown; the JSON report has it whole."""
 MAX_EVIDENCE_LINES = 20
@@ -159,7 +161,8 @@ def _header(result: Result, clock: _Clock | None, end_ns: int | None) -> list[Re
             version=result.tool_version,
             inputs=_plural(len(result.inputs), "input"),
             messages=_plural(s.messages_read, "message"),
-        )
+        ),
+        Text(release_line([result.upstream_release]), style="dim"),
     ]
     for summary in result.inputs[:3]:
         lines.append(

@@ -251,6 +251,7 @@ def _reads(params: ParameterSet, node: str, name: str) -> bool:
     nodes.setdefault(node, {})[name] = probe
     probed = ParameterSet(nodes, params.files, params.named | {node})
     try:
+        release_of(probed)
         if node == "fault_manager":
             fault_manager_config(probed.node(node))
         else:

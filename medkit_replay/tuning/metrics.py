@@ -154,11 +154,14 @@ class RunRow:
             that did not hold, ``;``-separated.
         input_warnings: what reading the input warned about (damage, refused messages): the
             figures cover what could be read.
+        upstream_release: the ros2_medkit release the variant models (empty when the input
+            could not be replayed).
         error: why the input could not be replayed (the figures are then empty).
     """
 
     variant: str
     input: str
+    upstream_release: str = ""
     messages: int | None = None
     reports: int | None = None
     faults: int | None = None
@@ -198,6 +201,7 @@ def run_row(
     return RunRow(
         variant=variant,
         input=input_label,
+        upstream_release=manager.config.release.name,
         messages=messages,
         reports=manager.output.reports_accepted,
         faults=len(manager.storage.faults),

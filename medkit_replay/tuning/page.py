@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.fleet.report import PAGE_STYLE, SORT_SCRIPT
 from medkit_replay.outputs.atomic import write_text_atomic
 from medkit_replay.outputs.html_tables import esc, short
+from medkit_replay.result import release_line
 from medkit_replay.tuning.ranking import RANKING
 from medkit_replay.version import __version__
 
@@ -118,14 +119,15 @@ def trade_off_svg(totals: Sequence[VariantTotal]) -> str:
 
 def _variants_table(grid: Grid, totals: Sequence[VariantTotal]) -> str:
     keys = [v.key for v in grid.varies]
-    heads = ["rank", "variant", *keys, "confirmed", "flaps", "events", "muted events",
-             "near misses", "muted faults", "mean latency (s)", "time confirmed (s)", "inputs",
-             "failed", "over budget"]  # fmt: skip
+    heads = ["rank", "variant", *keys, "ros2_medkit", "confirmed", "flaps", "events",
+             "muted events", "near misses", "muted faults", "mean latency (s)",
+             "time confirmed (s)", "inputs", "failed", "over budget"]  # fmt: skip
     settings = {v.id: [s.text for s in v.settings] for v in grid.variants}
     rows = []
     for t in totals:
         cells = [_num(t.rank), f"<td>{esc(t.variant)}</td>"]
         cells += [f"<td>{esc(short(text))}</td>" for text in settings[t.variant]]
+        cells.append(f"<td>{esc(t.upstream_release)}</td>")
         cells += [_num(t.faults_confirmed), _num(t.flaps), _num(t.events), _num(t.muted_events),
                   _num(t.near_misses), _num(t.muted_faults),
                   _num(t.latency_mean_ns, _seconds(t.latency_mean_ns)),
@@ -201,6 +203,7 @@ def render_page(grid: Grid, outcome: Outcome, inputs: int) -> str:
         f"<style>{PAGE_STYLE}{_EXTRA_STYLE}</style>\n</head>\n<body>\n"
         "<h1>medkit-replay sweep</h1>\n"
         f"<p>medkit-replay {esc(__version__)}; click a column heading to sort.</p>\n"
+        f"<p>{esc(release_line(grid.release_names))}</p>\n"
         f"<dl>{dl}</dl>\n<h2>Grid</h2>\n<ul>{varied}</ul>\n"
         "<h2>Trade-off across variants</h2>\n"
         "<p class=note>Each dot is a variant: up is more faults confirmed (summed over the "

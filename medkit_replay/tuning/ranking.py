@@ -9,7 +9,7 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Iterable, Mapping, Sequence
 
     from medkit_replay.tuning.grid import Variant
     from medkit_replay.tuning.metrics import CodeRow, RunRow
@@ -27,6 +27,7 @@ class VariantTotal:
 
     Attributes:
         rank: 1 for the best (see RANKING).
+        upstream_release: the ros2_medkit release the variant models.
         runs, failed_runs: inputs replayed, and inputs that could not be.
         faults_confirmed: detections: codes confirmed at least once, summed over inputs.
         latency_mean_ns: mean detection latency over all detections (floor).
@@ -36,6 +37,7 @@ class VariantTotal:
     rank: int
     variant: str
     label: str
+    upstream_release: str
     runs: int
     failed_runs: int
     faults_confirmed: int
@@ -82,8 +84,9 @@ _CODE_SUMMED = ("flaps", "confirmed_ns", "events", "muted_events", "near_misses"
 class Totals:
     """Running sums per variant and per variant x code."""
 
-    def __init__(self, variants: Sequence[Variant]) -> None:
+    def __init__(self, variants: Sequence[Variant], releases: Mapping[str, str]) -> None:
         self.variants = list(variants)
+        self.releases = releases  # the release each variant models, by id
         self._runs: dict[str, dict[str, int]] = {
             v.id: dict.fromkeys((*_SUMMED, "runs", "failed", "budget", "lat_sum", "lat_n"), 0)
             for v in variants
@@ -131,6 +134,7 @@ class Totals:
                     rank=0,
                     variant=variant.id,
                     label=variant.label,
+                    upstream_release=self.releases[variant.id],
                     runs=sums["runs"],
                     failed_runs=sums["failed"],
                     latency_mean_ns=sums["lat_sum"] // sums["lat_n"] if sums["lat_n"] else None,

@@ -49,6 +49,13 @@ class Grid:
     varies: tuple[Vary, ...]
     variants: tuple[Variant, ...]
     warnings: tuple[str, ...]
+    releases: dict[str, str]
+    """The ros2_medkit release each variant models, by variant id."""
+
+    @property
+    def release_names(self) -> list[str]:
+        """The releases the variants model, in grid order."""
+        return list(dict.fromkeys(self.releases[v.id] for v in self.variants))
 
 
 def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
@@ -61,10 +68,13 @@ def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
     variants = make_grid(varies)
     check_names(base, varies, variants)
     warnings: list[str] = []
+    releases: dict[str, str] = {}
     for variant in variants:
-        for warning in variant_config(base, variant).warnings:
+        config = variant_config(base, variant)
+        releases[variant.id] = config.manager.release.name
+        for warning in config.warnings:
             warnings.append(f"{variant.id}: {warning}")
-    return Grid(tuple(varies), tuple(variants), tuple(dict.fromkeys(warnings)))
+    return Grid(tuple(varies), tuple(variants), tuple(dict.fromkeys(warnings)), releases)
 
 
 def plan_jobs(
@@ -157,7 +167,7 @@ def run_sweep(
         v.id: [vary.cell(s) for vary, s in zip(grid.varies, v.settings, strict=True)]
         for v in grid.variants
     }
-    totals = Totals(grid.variants)
+    totals = Totals(grid.variants, grid.releases)
     failed: list[RunRow] = []
     over: dict[tuple[str, str], int] = {}
     lost: dict[str, Loss] = {}

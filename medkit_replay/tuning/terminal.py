@@ -14,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.outputs.console import literal_console, plain_text
+from medkit_replay.result import release_line
 from medkit_replay.text import printable
 from medkit_replay.tuning.ranking import RANKING
 
@@ -49,7 +50,8 @@ def summary_renderables(
     head = Text()
     head.append("sweep: ", style="bold")
     head.append(f"{len(totals):,} variant(s) x {inputs:,} input(s)")
-    parts: list[RenderableType] = [head]
+    releases = list(dict.fromkeys(total.upstream_release for total in totals))
+    parts: list[RenderableType] = [head, Text(release_line(releases), style="dim")]
     table = Table(
         box=box.SIMPLE,
         title="variants, best first",

@@ -52,7 +52,8 @@ def test_exit_0_when_the_budget_holds(tmp_path: Path, capsys: pytest.CaptureFixt
     status, out, err = check(tmp_path, PASSING, capsys)
     assert status == 0
     assert err == ""
-    lines = out.splitlines()
+    release, *lines = out.splitlines()
+    assert release == "ros2_medkit 0.7.0 modelled (medkit_replay.upstream_release: 0.6.0, 0.7.0)"
     assert lines[0] == f"check {tmp_path / 'mission.jsonl'} against budget.yaml: all 2 rules passed"
     assert lines[1] == "PASS few criticals: confirmed: CRITICAL 1 of at most 1"
     assert lines[2].startswith("PASS cluster of rule sensor_storm formed: sensor_storm_1 formed")

@@ -31,7 +31,11 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
     """Handle one ReportFault request on ``manager`` the plain way; returns ``accepted``."""
     output = manager.output
     reason = report_error(
-        request.fault_code, request.event_type, request.severity, request.source_id
+        request.fault_code,
+        request.event_type,
+        request.severity,
+        request.source_id,
+        manager.config.release.max_fault_code_length,
     )
     if reason is not None:
         _record(manager, request, reason, None, None)
