@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from medkit_replay import model
+from medkit_replay.releases import DEFAULT_RELEASE
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -214,6 +215,8 @@ class Result:
     """What the live fault manager would have concluded from the inputs."""
 
     tool_version: str
+    upstream_release: str = DEFAULT_RELEASE
+    """The ros2_medkit release modelled (``medkit_replay.upstream_release``), set by the replay."""
     inputs: tuple[InputSummary, ...]
     faults: tuple[FaultSnapshot, ...]
     events: Sequence[FaultEvent]

@@ -67,6 +67,7 @@ def assemble_result(
     )
     return Result(
         tool_version=__version__,
+        upstream_release=manager.config.release.name,
         inputs=tuple(summaries),
         faults=tuple(faults),
         events=events,
