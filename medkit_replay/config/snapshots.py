@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from yaml.constructor import ConstructorError, SafeConstructor
@@ -102,8 +103,14 @@ def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[s
 
 
 def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
+    switches = RosbagConfig(
+        bag_history=release.bag_history,
+        post_roll_sharing=release.post_roll_sharing,
+        post_roll_only=release.post_roll_only_bags,
+        cleanup_in_post_roll=release.cleanup_in_post_roll,
+    )
     if not reader.boolean(_R + "enabled", False):
-        return RosbagConfig()  # upstream declares the rest only when enabled
+        return switches  # upstream declares the rest only when enabled
     before = reader.double(_R + "duration_sec", 5.0)
     if not before > 0:
         reader.warn(f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0")
@@ -124,7 +131,8 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
     if per_fault < 0:
         reader.warn("snapshots.rosbag.max_bags_per_fault must be >= 0; no limit")
         per_fault = 0
-    return RosbagConfig(
+    return replace(
+        switches,
         enabled=True,
         duration_sec=before,
         duration_after_sec=after,
@@ -137,10 +145,6 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
         max_bag_size_mb=size,
         max_bags_per_fault=per_fault,
         auto_cleanup=reader.boolean(_R + "auto_cleanup", True),
-        bag_history=release.bag_history,
-        post_roll_sharing=release.post_roll_sharing,
-        post_roll_only=release.post_roll_only_bags,
-        cleanup_in_post_roll=release.cleanup_in_post_roll,
     )
 
 
