@@ -41,6 +41,7 @@ RAN_060 = (
     'medkit_replay: ros__parameters: upstream_release: "0.6.0"'
 )
 RAN_070 = "the robot ran 0.7.0 and this replay models 0.6.0"
+FAULT = "ros2_medkit_msgs/msg/Fault"
 LAYOUTS = {"0.6.0": base_typestore("0.6.0"), "0.7.0": TS}
 
 
@@ -57,9 +58,9 @@ def confirmed_event(store: Typestore, t_ns: int) -> Any:
         "status": "CONFIRMED",
         "reporting_sources": ["/diagnostic_bridge"],
     }
-    if "last_passed" in store.types["ros2_medkit_msgs/msg/Fault"].__dataclass_fields__:
+    if any(name == "last_passed" for name, _ in store.fielddefs[FAULT][1]):
         fields["last_passed"] = time(sec=0, nanosec=0)
-    fault = store.types["ros2_medkit_msgs/msg/Fault"](**fields)
+    fault = store.types[FAULT](**fields)
     return store.types[FAULT_EVENT](
         event_type="fault_confirmed",
         fault=fault,

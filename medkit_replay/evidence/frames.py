@@ -57,9 +57,10 @@ def sample(
 
 
 def freeze_frames(
-    plan: Plan, config: SnapshotConfig, source: EvidenceSource
+    plan: Plan, config: SnapshotConfig, source: EvidenceSource, cut: list[int] | None = None
 ) -> tuple[SnapshotCapture, ...]:
-    """Every capture with its values and what the live manager would hold of it at the end."""
+    """Every capture with its values and what the live manager would hold of it at the end;
+    ``cut``, if given, receives the ids of captures held only in part (0.6.0's row limit)."""
     sampled = {id(c): sample(c, config, source) for c in plan.captures}
     store = _store_set if config.snapshot_sets else _store_rows
     stored: dict[str, list[tuple[int, int]]] = {}  # fault code -> (capture id, rows)
@@ -80,6 +81,13 @@ def freeze_frames(
     if not config.freeze_frame_row:
         frame = {}
     held = {capture_id for sets in stored.values() for capture_id, _ in sets}
+    if cut is not None:
+        rows = {capture_id: n for sets in stored.values() for capture_id, n in sets}
+        cut += [
+            c.capture_id
+            for c in plan.captures
+            if c.capture_id in rows and rows[c.capture_id] < len(sampled[id(c)])
+        ]
     frames = {capture_id for capture_id, _ in frame.values()}
     return tuple(
         SnapshotCapture(

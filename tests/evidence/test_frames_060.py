@@ -14,9 +14,11 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from medkit_replay.evidence.plan import Step
+from medkit_replay.evidence.frames import freeze_frames
+from medkit_replay.evidence.plan import Plan, Step
 from medkit_replay.evidence.rules import SnapshotConfig
-from tests.evidence.robot import at
+from medkit_replay.evidence.source import EvidenceSource
+from tests.evidence.robot import at, write_robot
 from tests.evidence.test_frames import capture, frames
 
 if TYPE_CHECKING:
@@ -75,3 +77,18 @@ def test_a_clear_deletes_the_snapshots_and_060_keeps_no_freeze_frame(tmp_path: P
     # retain_on_clear (0.7.0 only) keeps them
     kept = SnapshotConfig(retain_on_clear=True)
     assert frames(tmp_path / "kept", steps, kept) == [(1, True, True, 2)]
+
+
+def test_the_capture_held_in_part_is_named(tmp_path: Path) -> None:
+    steps = captures_of(1, 2)
+    plan = Plan(captures=[s.capture for s in steps if s.capture is not None], steps=steps)
+    source = EvidenceSource([write_robot(tmp_path).bag])
+    cut: list[int] = []
+    try:
+        freeze_frames(plan, replace(OLD, max_per_fault=2), source, cut)
+        assert cut == [2]
+        whole: list[int] = []
+        freeze_frames(plan, SnapshotConfig(max_per_fault=2), source, whole)
+        assert whole == []  # 0.7.0 never stores a capture in part
+    finally:
+        source.close()

@@ -5,6 +5,7 @@ the JSON report keeps ``last_passed_ns`` at both (its schema does not change wit
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
@@ -63,6 +64,6 @@ def test_the_060_file_embeds_and_publishes_060s_fault(tmp_path: Path) -> None:
 
 def test_the_json_report_keeps_last_passed_at_both(tmp_path: Path) -> None:
     for result in both(tmp_path).values():
-        report = to_report(result)
+        report: dict[str, Any] = json.loads(json.dumps(to_report(result)))
         assert all("last_passed_ns" in fault for fault in report["faults"])
         assert all("last_passed_ns" in event["fault"] for event in report["events"])
