@@ -1,8 +1,9 @@
 """Parity with a robot that ran 0.6.0: its recorded FaultEvents carry 0.6.0's Fault (no
 ``last_passed``; cd8c19b0, #573 added it). They decode with the definition the recording stores,
 or, where it stores none (rosbag2 on Humble writes no definitions), with the layout of the
-release modelled; a stored definition of another release than the one modelled is pointed out
-with the parameter that selects it. Recordings are written in tmp_path and replayed whole.
+release modelled, then another release's when that one does not fit; a definition of another
+release than the one modelled is pointed out with the parameter that selects it. Recordings are
+written in tmp_path and replayed whole.
 """
 
 from __future__ import annotations
@@ -113,10 +114,12 @@ def test_without_a_definition_the_modelled_releases_layout_decodes_them(tmp_path
     humble = robot_bag(tmp_path, "0.6.0", "sqlite3", definitions=False)
     old = replayed(tmp_path, humble, "0.6.0")
     assert parity(old) == (1, 1, "match") and old["warnings"] == []
-    # 0.7.0's Fault does not fit the payload: nothing is read from it as an event
+    # 0.7.0's Fault does not fit the payload: 0.6.0's does, and the warning says so
     new = replayed(tmp_path, humble, "0.7.0")
-    assert new["parity"] is None
-    assert warnings_with(new, "cannot be decoded")
+    assert parity(new) == (1, 1, "match")
+    (said,) = warnings_with(new, "does not fit the data")
+    assert "used the ros2_medkit 0.6.0 definition: the robot ran 0.6.0" in said
+    assert 'upstream_release: "0.6.0"' in said
 
 
 def test_a_070_robots_definition_is_pointed_out_when_060_is_modelled(tmp_path: Path) -> None:

@@ -15,6 +15,7 @@ from rosbags.typesys import Stores, get_typestore
 from medkit_replay.inputs.cdr import REFUSALS, RejectedError, generated_decoder
 from medkit_replay.inputs.definition_bounds import check_definition
 from medkit_replay.msgdefs import (
+    FAULT_TYPES,
     Definition,
     DefinitionError,
     base_typestore,
@@ -22,6 +23,7 @@ from medkit_replay.msgdefs import (
     missing_fields,
     types_from_definition,
 )
+from medkit_replay.releases import RELEASES
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -83,9 +85,9 @@ class Decoder:
         msgtype: str,
         candidates: list[tuple[str, Typestore]],
         note: Callable[[str], None],
-        bundled: Callable[[], tuple[str, Typestore] | None] | None = None,
+        bundled: Callable[[], list[tuple[str, Typestore]]] | None = None,
     ) -> None:
-        """``bundled``, if given, gives the last candidate when first needed (building rosbags'
+        """``bundled``, if given, gives the last candidates when first needed (building rosbags'
         store costs a tenth of a second, and a recording's own definition usually fits)."""
         self.msgtype = msgtype
         self._candidates = [
@@ -96,14 +98,12 @@ class Decoder:
         self._first = self._candidates[0][2]
 
     def _extend(self) -> bool:
-        """Add the bundled candidate (once); False when there is none."""
+        """Add the bundled candidates (once); False when there are none."""
         bundled, self._bundled = self._bundled, None
-        found = bundled() if bundled is not None else None
-        if found is None:
-            return False
-        label, store = found
-        self._candidates.append((label, store, generated_decoder(self.msgtype, store)))
-        return True
+        found = bundled() if bundled is not None else []
+        for label, store in found:
+            self._candidates.append((label, store, generated_decoder(self.msgtype, store)))
+        return bool(found)
 
     def decode(self, raw: bytes | memoryview) -> object:
         """Deserialize one payload.
@@ -221,13 +221,34 @@ def make_decoder(
         store = base_typestore(definitions)
         return ("bundled definition", store) if msgtype in store.fielddefs else None
 
+    def others() -> list[tuple[str, Typestore]]:
+        """Other releases' layouts of a FaultEvent, tried when the modelled one's does not fit
+        (a recording without definitions from a robot on another release)."""
+        if msgtype not in FAULT_TYPES:
+            return []
+        found = {
+            release.msg_definitions: release.name
+            for release in RELEASES.values()
+            if release.msg_definitions != definitions
+        }
+        return [
+            (f"ros2_medkit {name} definition: the robot ran {name}; {select_hint(name)}", store)
+            for folder, name in found.items()
+            if msgtype in (store := base_typestore(folder)).fielddefs
+        ]
+
     if candidates:
-        return Decoder(msgtype, candidates, note, bundled), problem
-    found = bundled()
-    if found is None:
+
+        def further() -> list[tuple[str, Typestore]]:
+            found = bundled()
+            return ([found] if found is not None else []) + others()
+
+        return Decoder(msgtype, candidates, note, further), problem
+    first = bundled()
+    if first is None:
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
-    return Decoder(msgtype, [found], note), problem
+    return Decoder(msgtype, [first], note, others), problem
 
 
 def message_store(msgtype: str, definition: Definition) -> Typestore:
@@ -263,6 +284,13 @@ def other_release(definition: Definition, release: Release) -> str | None:
     why = f" (no {', '.join(lacks)})" if lacks else ""
     return (
         f"the recorded FaultEvent definition is ros2_medkit {robot}'s{why}: the robot ran "
-        f"{robot} and this replay models {release.name}; to model {robot}, set "
-        f'medkit_replay: ros__parameters: upstream_release: "{robot}" in a --config file'
+        f"{robot} and this replay models {release.name}; {select_hint(robot)}"
+    )
+
+
+def select_hint(name: str) -> str:
+    """How to model the release called ``name``."""
+    return (
+        f'to model {name}, set medkit_replay: ros__parameters: upstream_release: "{name}" '
+        "in a --config file"
     )
