@@ -3,7 +3,8 @@
 At 0.6.0 ``on_fault_confirmed`` skips a confirmation while a post-roll runs ("Already recording
 post-fault data"), ``flush_to_bag`` makes no bag from an empty buffer, the row is stored when the
 post-roll ends whatever happened to the fault meanwhile, and ``store_rosbag_file`` keeps one
-recording per fault. Upstream's lifecycle tests at bdcc4ed0 whose outcome differs are ported as
+recording per fault; and no freeze frame falls back to the reporting node's own topics
+(snapshot_capture.cpp has no entity default before a702f94f). Upstream's lifecycle tests at bdcc4ed0 whose outcome differs are ported as
 rows: RosbagCaptureIntegrationTest.MultipleFaultsHandled (two faults confirmed back to back)
 and FaultClearedBeforeConfirmed; test_rosbag_integration.test.py test_02 (auto-cleanup on clear).
 """
@@ -15,8 +16,9 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.evidence.graph import NodeGraph
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
-from tests.evidence.test_plan import BAG, Messages, at, clear, confirm, plan, step
+from tests.evidence.test_plan import BAG, Messages, _report, at, clear, confirm, plan, step
 
 if TYPE_CHECKING:
     from medkit_replay.model import Transition
@@ -112,3 +114,13 @@ def test_one_recording_per_fault_at_060_replaced_by_the_next() -> None:
     assert new.deleted is None
     # max_bags_per_fault does not exist at 0.6.0: the config never carries another cap
     assert OLD.rosbag.max_bags_per_fault == 1
+
+
+def test_no_entity_default_capture_at_060() -> None:
+    graph = NodeGraph(publishes={"/driver": frozenset({"/odom"})})
+    reports = [_report(10, "A", "/driver")]
+    new = plan([confirm(10, "A")], SnapshotConfig(), graph=graph, reports=reports)
+    assert [c.topics for c in new.captures] == [("/odom",)]
+    old_config = replace(SnapshotConfig(), entity_default=False, freeze_frame_row=False)
+    old = plan([confirm(10, "A")], old_config, graph=graph, reports=reports)
+    assert old.captures == [] and old.notes == []  # nothing to capture, nothing to say
