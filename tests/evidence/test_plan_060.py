@@ -4,9 +4,10 @@ At 0.6.0 ``on_fault_confirmed`` skips a confirmation while a post-roll runs ("Al
 post-fault data"), ``flush_to_bag`` makes no bag from an empty buffer, the row is stored when the
 post-roll ends whatever happened to the fault meanwhile, and ``store_rosbag_file`` keeps one
 recording per fault; and no freeze frame falls back to the reporting node's own topics
-(snapshot_capture.cpp has no entity default before a702f94f). Upstream's lifecycle tests at bdcc4ed0 whose outcome differs are ported as
-rows: RosbagCaptureIntegrationTest.MultipleFaultsHandled (two faults confirmed back to back)
-and FaultClearedBeforeConfirmed; test_rosbag_integration.test.py test_02 (auto-cleanup on clear).
+(snapshot_capture.cpp has no entity default before a702f94f). Upstream's lifecycle tests at
+bdcc4ed0 are ported as rows: RosbagCaptureIntegrationTest.MultipleFaultsHandled (two faults
+confirmed back to back) and FaultClearedBeforeConfirmed; test_rosbag_integration.test.py test_02
+(auto-cleanup on clear).
 """
 
 from __future__ import annotations
