@@ -13,11 +13,16 @@ from typing import TYPE_CHECKING, NamedTuple
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 
+from medkit_replay.releases import RELEASES
+
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from importlib.resources.abc import Traversable
 
     from rosbags.interfaces.typing import BaseDesc, FieldDesc, NameDesc, Typesdict
     from rosbags.typesys.store import Typestore
+
+    from medkit_replay.releases import Release
 
 BASE_STORE = Stores.ROS2_JAZZY
 """rosbags' store for types a recording does not define (has service_msgs, action_msgs...)."""
@@ -154,14 +159,20 @@ def normalize_typename(name: str) -> str:
     return name
 
 
-def _package_types(package: str) -> Typesdict:
-    """The types of one package bundled in ``inputs/interfaces/`` (services as
-    Request/Response/Event)."""
-    # Package data of the inputs, reached from the top package so the inputs are not imported.
-    interfaces = resources.files("medkit_replay").joinpath("inputs").joinpath("interfaces")
-    root = interfaces.joinpath(package)
+def _interfaces(folder: str = "") -> Traversable:
+    """``inputs/interfaces/`` (or a release's folder in it), reached from the top package so
+    the inputs are not imported."""
+    root = resources.files("medkit_replay").joinpath("inputs").joinpath("interfaces")
+    return root.joinpath(folder) if folder else root
+
+
+def _package_types(package: str, folder: str = "") -> Typesdict:
+    """The types of one package bundled in ``inputs/interfaces/`` (or in a release's folder
+    there: only the files that release has differently), services as Request/Response/Event."""
+    root = _interfaces(folder).joinpath(package)
     types: Typesdict = {}
-    for entry in sorted(root.joinpath("msg").iterdir(), key=lambda e: e.name):
+    msg = root.joinpath("msg")
+    for entry in sorted(msg.iterdir() if msg.is_dir() else (), key=lambda e: e.name):
         if entry.name.endswith(".msg"):
             name = f"{package}/msg/{entry.name.removesuffix('.msg')}"
             types.update(get_types_from_msg(entry.read_text(encoding="utf-8"), name))
@@ -174,9 +185,25 @@ def _package_types(package: str) -> Typesdict:
 
 
 @cache
-def bundled_types() -> Typesdict:
-    """The ros2_medkit_msgs types bundled in ``interfaces/``, services as Request/Response/Event."""
-    return _package_types(MEDKIT_PACKAGE)
+def bundled_types(definitions: str = "") -> Typesdict:
+    """The ros2_medkit_msgs types bundled in ``interfaces/``, services as Request/Response/Event.
+
+    ``definitions``: a release's folder (``Release.msg_definitions``) whose files replace the
+    newest ones ("" for the newest).
+    """
+    types = _package_types(MEDKIT_PACKAGE)
+    if definitions:
+        types = {**types, **_package_types(MEDKIT_PACKAGE, definitions)}
+    return types
+
+
+def bundled_text(name: str, definitions: str = "") -> str:
+    """The bundled ``ros2_medkit_msgs/msg/<name>.msg`` text of a release (see bundled_types)."""
+    for folder in (definitions, "") if definitions else ("",):
+        entry = _interfaces(folder).joinpath(MEDKIT_PACKAGE).joinpath("msg").joinpath(f"{name}.msg")
+        if entry.is_file():
+            return entry.read_text(encoding="utf-8")
+    raise FileNotFoundError(f"{MEDKIT_PACKAGE}/msg/{name}.msg is not bundled")
 
 
 @cache
@@ -190,8 +217,42 @@ def reference_types() -> Typesdict:
 
 
 @cache
-def base_typestore() -> Typestore:
-    """rosbags' Jazzy store with the bundled ros2_medkit_msgs registered (shared, never changed)."""
+def base_typestore(definitions: str = "") -> Typestore:
+    """rosbags' Jazzy store with the bundled ros2_medkit_msgs registered (shared, never changed);
+    ``definitions`` names a release's folder of differing ones (see bundled_types)."""
     store = get_typestore(BASE_STORE)
-    store.register(bundled_types())
+    store.register(bundled_types(definitions))
     return store
+
+
+FAULT_TYPES = (f"{MEDKIT_PACKAGE}/msg/FaultEvent", f"{MEDKIT_PACKAGE}/msg/Fault")
+"""The published types whose layout tells one release from another."""
+
+
+def layout_releases(types: Typesdict) -> list[Release]:
+    """The releases whose FaultEvent and Fault have the fields (names and types) of ``types``,
+    a recorded definition parsed (empty when it defines neither, or no release matches)."""
+    recorded = {name: types[name][1] for name in FAULT_TYPES if name in types}
+    if not recorded:
+        return []
+    return [
+        release
+        for release in RELEASES.values()
+        if all(
+            bundled_types(release.msg_definitions)[name][1] == fields
+            for name, fields in recorded.items()
+        )
+    ]
+
+
+def missing_fields(types: Typesdict, definitions: str = "") -> list[str]:
+    """Fields of the bundled Fault and FaultEvent (of a release's ``definitions``) that the
+    recorded ``types`` lack, as ``Type.field``."""
+    bundled = bundled_types(definitions)
+    missing = []
+    for name in FAULT_TYPES:
+        if name in types:
+            have = {field for field, _ in types[name][1]}
+            short = name.rsplit("/", 1)[-1]
+            missing += [f"{short}.{f}" for f, _ in bundled[name][1] if f not in have]
+    return missing

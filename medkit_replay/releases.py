@@ -59,6 +59,39 @@ class Release:
     near_misses: bool
     # -- the bridges and the reporter (bridges, config) --
     # -- messages, freeze frames and black-box recordings (evidence, outputs, parity) --
+    msg_definitions: str
+    """Where this release's ros2_medkit_msgs differ from the newest: a folder under
+    ``medkit_replay/inputs/interfaces/`` whose files replace the bundled ones ("" for none).
+    0.6.0's Fault has no ``last_passed`` (added by cd8c19b0, #573) and its GetRosbag and
+    ListRosbags have no recording ids (afc13244, 869067ba, #620)."""
+    freeze_frame_row: bool
+    """A capture also keeps the fault's compact freeze frame, retained on clear (579b39db,
+    822ebba6, b77cde21, #491)."""
+    entity_default_snapshots: bool
+    """``snapshots.entity_default`` exists: with no configured topic, capture the reporting
+    node's own topics; empty ``default_topics`` entries are dropped (a702f94f, 8f30e127,
+    ede2a62e)."""
+    snapshot_sets: bool
+    """A capture is stored as one set and ``snapshots.max_per_fault`` evicts whole sets, oldest
+    first (df421024, ee00c000); before, a fault's first ``max_per_fault`` rows were kept and
+    every later one refused."""
+    retain_on_clear: bool
+    """``snapshots.retain_on_clear`` exists (b066d5b3, 5af97631); before, a clear always
+    deleted the fault's snapshots."""
+    default_bag_format: str
+    """``snapshots.rosbag.format`` when unset: sqlite3 until 054a41a5 (#610) made it mcap."""
+    bag_history: bool
+    """``snapshots.rosbag.max_bags_per_fault`` exists (f35c88a3, afc13244, #620); before, a
+    fault held one recording, replaced by its next one."""
+    post_roll_sharing: bool
+    """A fault confirmed during another's post-roll joins that recording (5a58259f, 9ac52873,
+    86c35f17, #561); before, it was skipped and got no recording."""
+    post_roll_only_bags: bool
+    """A fault confirmed with nothing buffered still gets a recording of its post-roll
+    (0374f5fe, #594); before, an empty buffer meant no recording."""
+    cleanup_in_post_roll: bool
+    """A fault cleared during its own post-roll gets no recording row (6e5d2797, 5af97631);
+    before, the row was stored when the post-roll ended and the recording kept."""
 
 
 RELEASES: dict[str, Release] = {
@@ -82,6 +115,16 @@ RELEASES: dict[str, Release] = {
             near_misses=False,
             # -- bridges --
             # -- evidence --
+            msg_definitions="0.6.0",
+            freeze_frame_row=False,
+            entity_default_snapshots=False,
+            snapshot_sets=False,
+            retain_on_clear=False,
+            default_bag_format="sqlite3",
+            bag_history=False,
+            post_roll_sharing=False,
+            post_roll_only_bags=False,
+            cleanup_in_post_roll=False,
         ),
         # main at 505bc2d5 (2026-08-22) plus #591; tagged 2026-08-27.
         Release(
@@ -101,6 +144,16 @@ RELEASES: dict[str, Release] = {
             near_misses=True,
             # -- bridges --
             # -- evidence --
+            msg_definitions="",
+            freeze_frame_row=True,
+            entity_default_snapshots=True,
+            snapshot_sets=True,
+            retain_on_clear=True,
+            default_bag_format="mcap",
+            bag_history=True,
+            post_roll_sharing=True,
+            post_roll_only_bags=True,
+            cleanup_in_post_roll=True,
         ),
     )
 }

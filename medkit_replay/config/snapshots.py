@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from yaml.constructor import ConstructorError, SafeConstructor
@@ -15,6 +16,7 @@ from medkit_replay.config.reader import ParameterReader
 from medkit_replay.errors import ConfigError
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 from medkit_replay.files import read_limited_text
+from medkit_replay.releases import default_release
 from medkit_replay.yaml_bounds import compose_config
 
 if TYPE_CHECKING:
@@ -30,16 +32,17 @@ _R = "snapshots.rosbag."
 def snapshot_config(
     params: NodeParams, release: Release | None = None
 ) -> tuple[SnapshotConfig, list[str]]:
-    """Build the capture config from the fault_manager node's parameters.
+    """Build the capture config from the fault_manager node's parameters as ``release``
+    declares them (the newest when None): a parameter it does not have is not read.
 
     Raises:
         ConfigError: a parameter of the wrong type, with its file and line.
     """
-    del release  # no capture rule reads the release yet
-    return located(params, lambda: _build(params))
+    chosen = release or default_release()
+    return located(params, lambda: _build(params, chosen))
 
 
-def _build(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
+def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     cooldown = reader.double(_P + "recapture_cooldown_sec", 60.0)
     if cooldown < 0 or math.isnan(cooldown):
@@ -57,7 +60,9 @@ def _build(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
     if max_size <= 0:
         reader.warn(f"snapshots.max_message_size {max_size} must be positive; using 65536")
         max_size = 65536
-    defaults = tuple(t for t in reader.strings(_P + "default_topics") if t)
+    defaults = reader.strings(_P + "default_topics")
+    if release.entity_default_snapshots:  # '' is "no defaults" since entity_default came
+        defaults = tuple(t for t in defaults if t)
     fault_specific: dict[str, tuple[str, ...]] = {}
     patterns: dict[str, tuple[str, ...]] = {}
     file_param = params.get(_P + "config_file")
@@ -83,20 +88,29 @@ def _build(params: NodeParams) -> tuple[SnapshotConfig, list[str]]:
         timeout_sec=timeout,
         max_message_size=max_size,
         default_topics=defaults,
-        entity_default=reader.boolean(_P + "entity_default", True),
+        entity_default=release.entity_default_snapshots
+        and reader.boolean(_P + "entity_default", True),
         fault_specific=fault_specific,
         patterns=tuple(compiled),
         recapture_cooldown_sec=cooldown,
-        retain_on_clear=reader.boolean(_P + "retain_on_clear", False),
+        retain_on_clear=release.retain_on_clear and reader.boolean(_P + "retain_on_clear", False),
         max_per_fault=max_per_fault,
-        rosbag=_rosbag(reader),
+        freeze_frame_row=release.freeze_frame_row,
+        snapshot_sets=release.snapshot_sets,
+        rosbag=_rosbag(reader, release),
     )
     return config, reader.warnings
 
 
-def _rosbag(reader: ParameterReader) -> RosbagConfig:
+def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
+    switches = RosbagConfig(
+        bag_history=release.bag_history,
+        post_roll_sharing=release.post_roll_sharing,
+        post_roll_only=release.post_roll_only_bags,
+        cleanup_in_post_roll=release.cleanup_in_post_roll,
+    )
     if not reader.boolean(_R + "enabled", False):
-        return RosbagConfig()  # upstream declares the rest only when enabled
+        return switches  # upstream declares the rest only when enabled
     before = reader.double(_R + "duration_sec", 5.0)
     if not before > 0:
         reader.warn(f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0")
@@ -105,7 +119,7 @@ def _rosbag(reader: ParameterReader) -> RosbagConfig:
     if after < 0:
         reader.warn(f"snapshots.rosbag.duration_after_sec {after} must be >= 0; using 0.0")
         after = 0.0
-    fmt = reader.string(_R + "format", "mcap")
+    fmt = reader.string(_R + "format", release.default_bag_format)
     if fmt not in ("mcap", "sqlite3"):
         reader.warn(f"snapshots.rosbag.format {fmt!r} is unknown; using sqlite3 as upstream does")
         fmt = "sqlite3"
@@ -113,11 +127,12 @@ def _rosbag(reader: ParameterReader) -> RosbagConfig:
     if size <= 0:
         reader.warn("snapshots.rosbag.max_bag_size_mb must be positive; using 50")
         size = 50
-    per_fault = reader.integer(_R + "max_bags_per_fault", 1)
+    per_fault = reader.integer(_R + "max_bags_per_fault", 1) if release.bag_history else 1
     if per_fault < 0:
         reader.warn("snapshots.rosbag.max_bags_per_fault must be >= 0; no limit")
         per_fault = 0
-    return RosbagConfig(
+    return replace(
+        switches,
         enabled=True,
         duration_sec=before,
         duration_after_sec=after,

@@ -130,7 +130,15 @@ def _gather(
     plan: Plan, config: SnapshotConfig, options: EvidenceOptions, source: EvidenceSource
 ) -> Evidence:
     notes = list(plan.notes)
-    snapshots = freeze_frames(plan, config, source)
+    cut: list[int] = []
+    snapshots = freeze_frames(plan, config, source, cut)
+    if cut:
+        notes.append(
+            f"{len(cut)} freeze-frame capture(s) held in part (capture ids "
+            f"{', '.join(map(str, cut[:20]))}{' ...' if len(cut) > 20 else ''}): the fault "
+            f"reached snapshots.max_per_fault ({config.max_per_fault}) rows during the capture, "
+            "and this release keeps a fault's first rows"
+        )
     recordings: tuple[EvidenceRecording, ...] = ()
     refused: tuple[str, ...] = ()
     if plan.recordings:

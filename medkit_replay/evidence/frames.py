@@ -1,7 +1,7 @@
 """Freeze frames: the message each capture would have taken per topic, decoded and rendered.
 
-Only the kept messages are decoded. Storage (eviction, clear, the retained freeze frame) is
-replayed over the captures and clears in time order to say what the manager would still hold.
+Only the kept messages are decoded. Storage (the per-fault cap, clear, the retained freeze frame)
+is replayed over the captures and clears in time order to say what the manager would still hold.
 """
 
 from __future__ import annotations
@@ -57,10 +57,12 @@ def sample(
 
 
 def freeze_frames(
-    plan: Plan, config: SnapshotConfig, source: EvidenceSource
+    plan: Plan, config: SnapshotConfig, source: EvidenceSource, cut: list[int] | None = None
 ) -> tuple[SnapshotCapture, ...]:
-    """Every capture with its values and what the live manager would hold of it at the end."""
+    """Every capture with its values and what the live manager would hold of it at the end;
+    ``cut``, if given, receives the ids of captures held only in part (0.6.0's row limit)."""
     sampled = {id(c): sample(c, config, source) for c in plan.captures}
+    store = _store_set if config.snapshot_sets else _store_rows
     stored: dict[str, list[tuple[int, int]]] = {}  # fault code -> (capture id, rows)
     frame: dict[str, tuple[int, bool]] = {}  # fault code -> (capture id, holds values)
     for step in plan.steps:
@@ -72,14 +74,20 @@ def freeze_frames(
         topics = sampled[id(capture)]
         code = capture.fault_code
         if topics:
-            sets = stored.setdefault(code, [])
-            sets.append((capture.capture_id, len(topics)))
-            gone = evict_capture_sets(sets, config.max_per_fault)
-            stored[code] = [s for s in sets if s[0] not in gone]
+            stored[code] = store(stored.get(code, []), capture.capture_id, len(topics), config)
             frame[code] = (capture.capture_id, True)
         elif not capture.entity_scoped and not frame.get(code, (0, False))[1]:
             frame[code] = (capture.capture_id, False)
+    if not config.freeze_frame_row:
+        frame = {}
     held = {capture_id for sets in stored.values() for capture_id, _ in sets}
+    if cut is not None:
+        rows = {capture_id: n for sets in stored.values() for capture_id, n in sets}
+        cut += [
+            c.capture_id
+            for c in plan.captures
+            if c.capture_id in rows and rows[c.capture_id] < len(sampled[id(c)])
+        ]
     frames = {capture_id for capture_id, _ in frame.values()}
     return tuple(
         SnapshotCapture(
@@ -92,3 +100,22 @@ def freeze_frames(
         )
         for c in plan.captures
     )
+
+
+def _store_set(
+    sets: list[tuple[int, int]], capture_id: int, rows: int, config: SnapshotConfig
+) -> list[tuple[int, int]]:
+    """Store a capture as one set; ``max_per_fault`` evicts whole sets, oldest first."""
+    sets = [*sets, (capture_id, rows)]
+    gone = evict_capture_sets(sets, config.max_per_fault)
+    return [s for s in sets if s[0] not in gone]
+
+
+def _store_rows(
+    sets: list[tuple[int, int]], capture_id: int, rows: int, config: SnapshotConfig
+) -> list[tuple[int, int]]:
+    """Store a capture row by row while the fault holds fewer than ``max_per_fault`` rows;
+    later rows are refused (0.6.0: the first rows are kept, a capture may be cut short)."""
+    cap = config.max_per_fault
+    room = rows if cap <= 0 else min(rows, cap - sum(n for _, n in sets))
+    return [*sets, (capture_id, room)] if room > 0 else sets

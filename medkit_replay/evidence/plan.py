@@ -259,8 +259,8 @@ class _BlackBox:
             return  # lazy_start: nothing entered PREFAILED yet, the buffer never started
         active = self.active
         if active is not None:
-            if code == active.current:
-                return
+            if code == active.current or not self.config.post_roll_sharing:
+                return  # before sharing (0.6.0), a confirmation during a post-roll is skipped
             scope = self._entity_topics(code, t_ns)
             if code not in active.attached and len(set(active.attached)) < ATTACHED_FAULT_CAP:
                 active.attached.append(code)
@@ -272,8 +272,8 @@ class _BlackBox:
             self.unscoped.append(code)
         start = max(t_ns - self.before_ns, self.buffer_from)
         buffered = start <= t_ns and self.probe(self.plan.subscribed, start, t_ns)
-        if not buffered and self.after_ns <= 0:
-            return  # no history and no post-roll: upstream creates no bag
+        if not buffered and (self.after_ns <= 0 or not self.config.post_roll_only):
+            return  # nothing buffered: no bag, unless a post-roll-only one is made (0.7.0)
         recording = PlannedRecording(
             name=recording_name(code, t_ns),
             fault_code=code,
@@ -326,14 +326,15 @@ class _BlackBox:
             if cap > 0 and len(mine) > cap:
                 for old in mine[: len(mine) - cap]:
                     self.rows.remove((code, old))
+                    history = self.config.bag_history
+                    why = f"max_bags_per_fault {cap}" if history else "one per fault"
                     self._unlink(
-                        old,
-                        recording.end_ns,
-                        f"max_bags_per_fault {cap}: replaced by {recording.name} for {code}",
+                        old, recording.end_ns, f"{why}: replaced by {recording.name} for {code}"
                     )
 
     def _wants_row(self, code: str) -> bool:
-        if not self.config.auto_cleanup or self.config.keeps_history:
+        config = self.config
+        if not config.auto_cleanup or config.keeps_history or not config.cleanup_in_post_roll:
             return True
         return self.status.get(code) != "CLEARED"
 
@@ -341,7 +342,7 @@ class _BlackBox:
         if not self.config.auto_cleanup or self.config.keeps_history:
             return
         active = self.active
-        if active is not None and code == active.current:
+        if active is not None and code == active.current and self.config.cleanup_in_post_roll:
             active.current = ""  # an attached fault's row is withheld at the finalize
         doomed = [r for c, r in self.rows if c == code]
         self.rows = [(c, r) for c, r in self.rows if c != code]

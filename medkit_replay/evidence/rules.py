@@ -37,6 +37,14 @@ class RosbagConfig:
     max_bag_size_mb: int = 50
     max_bags_per_fault: int = 1
     auto_cleanup: bool = True
+    bag_history: bool = True
+    """max_bags_per_fault is a parameter (False: one recording per fault, replaced by the next)."""
+    post_roll_sharing: bool = True
+    """A fault confirmed during another's post-roll joins it (False: it gets no recording)."""
+    post_roll_only: bool = True
+    """Nothing buffered but a post-roll to come still makes a recording (False: none)."""
+    cleanup_in_post_roll: bool = True
+    """A fault cleared during its own post-roll gets no row (False: its row is stored)."""
 
     @property
     def keeps_history(self) -> bool:
@@ -59,6 +67,11 @@ class SnapshotConfig:
     recapture_cooldown_sec: float = 60.0
     retain_on_clear: bool = False
     max_per_fault: int = 10
+    freeze_frame_row: bool = True
+    """A capture also writes the fault's compact freeze frame (Release.freeze_frame_row)."""
+    snapshot_sets: bool = True
+    """max_per_fault evicts whole capture sets, oldest first (False: a fault's first
+    max_per_fault rows are kept and later ones refused; Release.snapshot_sets)."""
     rosbag: RosbagConfig = field(default_factory=RosbagConfig)
 
     @property

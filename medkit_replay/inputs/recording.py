@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary, Loss
+    from medkit_replay.releases import Release
 
 
 def open_bag1(path: Path, ctx: InputContext) -> Input:
@@ -162,6 +163,7 @@ def open_recording(
     use_index: bool = True,
     follow: Follow | None = None,
     tallies: dict[str, Tally] | None = None,
+    release: Release | None = None,
 ) -> Recording:
     """Open inputs to be read as one recording.
 
@@ -179,6 +181,9 @@ def open_recording(
             (:mod:`medkit_replay.inputs.tail`); None: read them as they stand.
         tallies: bytes fetched for remote inputs are counted here, by URL (give the same
             dict to several passes over the same inputs to count them all).
+        release: the upstream release modelled (None: the newest): its ros2_medkit_msgs
+            decode what a recording stores no definition for, and a recorded FaultEvent
+            definition of another release is pointed out.
 
     Returns:
         The opened recording; close it (``with``) to release files and temporary copies.
@@ -210,7 +215,9 @@ def open_recording(
     try:
         for index, raw_path in enumerate(paths):
             if is_remote(raw_path):
-                context = InputContext(index, selection, sink(str(raw_path)), use_index=use_index)
+                context = InputContext(
+                    index, selection, sink(str(raw_path)), use_index=use_index, release=release
+                )
                 # The remote reader (threads, the optional store client) loads with a URL only.
                 from medkit_replay.inputs.remote import open_remote  # noqa: PLC0415
 
@@ -230,7 +237,9 @@ def open_recording(
                     f"unsupported input (expected a rosbag2 directory or a {kinds} file)",
                     path=str(path),
                 )
-            context = InputContext(index, selection, sink(str(path)), use_index=use_index)
+            context = InputContext(
+                index, selection, sink(str(path)), use_index=use_index, release=release
+            )
             try:
                 inputs.append(opener(path, context))
             except OSError as exc:

@@ -25,9 +25,10 @@ from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.skipped import report_skipped
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, TEMP_MARGIN, NotABagError, temp_room
-from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder
+from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder, other_release
 from medkit_replay.model import InputSummary, Loss, TopicSummary
 from medkit_replay.msgdefs import DefinitionError
+from medkit_replay.releases import default_release
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded
 
 if sys.version_info >= (3, 14):
@@ -490,17 +491,23 @@ class Rosbag2Input:
                 fmt = connection.serialization
                 self._warn(f"topic {topic} is serialized as {fmt!r}, not CDR; not read")
                 return False
+            release = self.ctx.release or default_release()
             try:
                 decoder, problem = make_decoder(
                     msgtype,
                     connection.definition,
                     lambda note: self._warn(f"{topic}: {note}"),
+                    release.msg_definitions,
                 )
             except DefinitionError as exc:
                 self._warn(f"topic {topic} cannot be decoded: {exc}; not read")
                 return False
             if problem:
                 self._warn(f"{topic}: recorded definition unusable ({problem}); using the bundled")
+            elif role == "fault_events":
+                mismatch = other_release(connection.definition, release)
+                if mismatch:
+                    self._warn(f"{topic}: {mismatch}")
             self._readers[(file_no, connection.id)] = (role, decoder)
             # The storage file hands this very object back with each of its messages.
             self._by_connection[id(connection)] = (role, decoder)

@@ -14,6 +14,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.merge import Timed
     from medkit_replay.inputs.selection import Role, Selection
     from medkit_replay.model import InputSummary, Loss
+    from medkit_replay.releases import Release
 
 
 class Message(NamedTuple):
@@ -49,12 +50,15 @@ class InputContext(NamedTuple):
     Attributes:
         use_index: read uncompressed MCAP and ROS 1 bag chunks through their message indexes
             (False: every chunk is read whole, the route the index must agree with).
+        release: the upstream release modelled (None: the newest): its ros2_medkit_msgs
+            decode what a recording stores no definition for.
     """
 
     input_index: int
     selection: Selection
     warn: Warn
     use_index: bool = True
+    release: Release | None = None
 
 
 class Input(Protocol):

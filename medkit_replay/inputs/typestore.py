@@ -14,13 +14,24 @@ from rosbags.typesys import Stores, get_typestore
 
 from medkit_replay.inputs.cdr import REFUSALS, RejectedError, generated_decoder
 from medkit_replay.inputs.definition_bounds import check_definition
-from medkit_replay.msgdefs import Definition, DefinitionError, base_typestore, types_from_definition
+from medkit_replay.msgdefs import (
+    FAULT_TYPES,
+    Definition,
+    DefinitionError,
+    base_typestore,
+    layout_releases,
+    missing_fields,
+    types_from_definition,
+)
+from medkit_replay.releases import RELEASES
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
     from rosbags.interfaces.typing import FieldDesc, Typesdict
     from rosbags.typesys.store import Typestore
+
+    from medkit_replay.releases import Release
 
 PLAIN_CDR = b"\x00\x01"
 """Encapsulation header of plain little-endian CDR: what generated decoders take."""
@@ -60,10 +71,6 @@ def _complete(types: Typesdict, fallback: Callable[[], Typesdict]) -> Typesdict:
     return done
 
 
-def _base_fielddefs() -> Typesdict:
-    return base_typestore().fielddefs
-
-
 class Decoder:
     """Decodes one type's CDR payloads, trying the recording's definition, then the bundled one.
 
@@ -78,9 +85,9 @@ class Decoder:
         msgtype: str,
         candidates: list[tuple[str, Typestore]],
         note: Callable[[str], None],
-        bundled: Callable[[], tuple[str, Typestore] | None] | None = None,
+        bundled: Callable[[], list[tuple[str, Typestore]]] | None = None,
     ) -> None:
-        """``bundled``, if given, gives the last candidate when first needed (building rosbags'
+        """``bundled``, if given, gives the last candidates when first needed (building rosbags'
         store costs a tenth of a second, and a recording's own definition usually fits)."""
         self.msgtype = msgtype
         self._candidates = [
@@ -91,14 +98,12 @@ class Decoder:
         self._first = self._candidates[0][2]
 
     def _extend(self) -> bool:
-        """Add the bundled candidate (once); False when there is none."""
+        """Add the bundled candidates (once); False when there are none."""
         bundled, self._bundled = self._bundled, None
-        found = bundled() if bundled is not None else None
-        if found is None:
-            return False
-        label, store = found
-        self._candidates.append((label, store, generated_decoder(self.msgtype, store)))
-        return True
+        found = bundled() if bundled is not None else []
+        for label, store in found:
+            self._candidates.append((label, store, generated_decoder(self.msgtype, store)))
+        return bool(found)
 
     def decode(self, raw: bytes | memoryview) -> object:
         """Deserialize one payload.
@@ -164,8 +169,11 @@ def _rosbags_decode(store: Typestore, raw: bytes, msgtype: str) -> object:
 
 
 @lru_cache(maxsize=256)
-def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestore] | str:
-    """A store holding a recorded definition (with what it lacks from the base), or why not.
+def _recorded_store(
+    msgtype: str, definition: Definition, definitions: str = ""
+) -> tuple[str, Typestore] | str:
+    """A store holding a recorded definition (with what it lacks from the base of the release's
+    ``definitions``), or why not.
 
     Cached: recordings of one fleet share their definitions, and compiling one costs ~10 ms.
     """
@@ -173,7 +181,7 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
         types = types_from_definition(msgtype, definition)
         if msgtype not in types:
             raise DefinitionError(f"recorded definition does not define {msgtype}")
-        complete = _complete(types, _base_fielddefs)
+        complete = _complete(types, lambda: base_typestore(definitions).fielddefs)
         check_definition(msgtype, complete)  # before rosbags writes code proportional to it
         store = get_typestore(Stores.EMPTY)
         store.register(complete)
@@ -186,7 +194,7 @@ def _recorded_store(msgtype: str, definition: Definition) -> tuple[str, Typestor
 
 
 def make_decoder(
-    msgtype: str, definition: Definition, note: Callable[[str], None]
+    msgtype: str, definition: Definition, note: Callable[[str], None], definitions: str = ""
 ) -> tuple[Decoder, str | None]:
     """A decoder for ``msgtype`` and, if the recorded definition is unusable, why.
 
@@ -194,6 +202,8 @@ def make_decoder(
         msgtype: the normalised type name.
         definition: what the recording stores for it (may be empty).
         note: told once if the recorded definition turns out not to fit the data.
+        definitions: the modelled release's ros2_medkit_msgs (``Release.msg_definitions``),
+            used where the recording stores none.
 
     Raises:
         DefinitionError: neither the recording nor the bundled types define ``msgtype``.
@@ -201,23 +211,44 @@ def make_decoder(
     candidates: list[tuple[str, Typestore]] = []
     problem = None
     if definition.text.strip():
-        recorded = _recorded_store(msgtype, definition)
+        recorded = _recorded_store(msgtype, definition, definitions)
         if isinstance(recorded, str):
             problem = recorded
         else:
             candidates.append(recorded)
 
     def bundled() -> tuple[str, Typestore] | None:
-        store = base_typestore()
+        store = base_typestore(definitions)
         return ("bundled definition", store) if msgtype in store.fielddefs else None
 
+    def others() -> list[tuple[str, Typestore]]:
+        """Other releases' layouts of a FaultEvent, tried when the modelled one's does not fit
+        (a recording without definitions from a robot on another release)."""
+        if msgtype not in FAULT_TYPES:
+            return []
+        found = {
+            release.msg_definitions: release.name
+            for release in RELEASES.values()
+            if release.msg_definitions != definitions
+        }
+        return [
+            (f"ros2_medkit {name} definition: the robot ran {name}; {select_hint(name)}", store)
+            for folder, name in found.items()
+            if msgtype in (store := base_typestore(folder)).fielddefs
+        ]
+
     if candidates:
-        return Decoder(msgtype, candidates, note, bundled), problem
-    found = bundled()
-    if found is None:
+
+        def further() -> list[tuple[str, Typestore]]:
+            found = bundled()
+            return ([found] if found is not None else []) + others()
+
+        return Decoder(msgtype, candidates, note, further), problem
+    first = bundled()
+    if first is None:
         reason = f" ({problem})" if problem else ""
         raise DefinitionError(f"no usable definition of {msgtype}{reason}")
-    return Decoder(msgtype, [found], note), problem
+    return Decoder(msgtype, [first], note, others), problem
 
 
 def message_store(msgtype: str, definition: Definition) -> Typestore:
@@ -233,3 +264,33 @@ def message_store(msgtype: str, definition: Definition) -> Typestore:
     if msgtype in base_typestore().fielddefs:
         return base_typestore()
     raise DefinitionError(f"no usable definition of {msgtype}")
+
+
+@lru_cache(maxsize=64)
+def other_release(definition: Definition, release: Release) -> str | None:
+    """What to tell the user when a recorded FaultEvent definition is another release's
+    layout than ``release``'s: which release the robot ran and how to select it (None: the
+    definitions agree, or the recorded one matches no release).
+    """
+    try:
+        types = types_from_definition("ros2_medkit_msgs/msg/FaultEvent", definition)
+    except DefinitionError:
+        return None
+    matching = layout_releases(types)
+    if not matching or release in matching:
+        return None
+    robot = matching[-1].name
+    lacks = missing_fields(types, release.msg_definitions)
+    why = f" (no {', '.join(lacks)})" if lacks else ""
+    return (
+        f"the recorded FaultEvent definition is ros2_medkit {robot}'s{why}: the robot ran "
+        f"{robot} and this replay models {release.name}; {select_hint(robot)}"
+    )
+
+
+def select_hint(name: str) -> str:
+    """How to model the release called ``name``."""
+    return (
+        f'to model {name}, set medkit_replay: ros__parameters: upstream_release: "{name}" '
+        "in a --config file"
+    )

@@ -3,7 +3,8 @@
 Two topics, each message stamped with the bag time of the change (log time = publish time):
 
 - ``/fault_manager/events``: ``ros2_medkit_msgs/msg/FaultEvent``, exactly the events the live
-  manager would have published (``timestamp`` = bag time; the fault's times likewise);
+  manager would have published (``timestamp`` = bag time; the fault's times likewise), in the
+  message layout of the release modelled (0.6.0's Fault has no ``last_passed``);
 - ``/medkit_replay/transitions``: ``medkit_replay_msgs/msg/FaultTransition``, every status change
   (also the silent ones, e.g. auto-confirmation), a small message type of medkit-replay's own.
 
@@ -21,16 +22,16 @@ from __future__ import annotations
 
 import heapq
 from functools import cache
-from importlib import resources
-from typing import IO, TYPE_CHECKING, BinaryIO, Protocol, cast
+from typing import IO, TYPE_CHECKING, Any, BinaryIO, Protocol, cast
 
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from medkit_replay.model import NS_PER_SEC
-from medkit_replay.msgdefs import MEDKIT_PACKAGE, Definition, types_from_definition
+from medkit_replay.msgdefs import MEDKIT_PACKAGE, Definition, bundled_text, types_from_definition
 from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.outputs.console import warn as warn_stderr
+from medkit_replay.releases import release_named
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -115,11 +116,6 @@ class _McapWriter(Protocol):
     def finish(self) -> None: ...
 
 
-def _bundled(name: str) -> str:
-    root = resources.files("medkit_replay.inputs").joinpath("interfaces").joinpath(MEDKIT_PACKAGE)
-    return root.joinpath("msg").joinpath(f"{name}.msg").read_text(encoding="utf-8")
-
-
 def _concatenated(text: str, dependencies: list[tuple[str, str]]) -> str:
     """A definition with its dependencies appended as rosbag2 stores it (``MSG: pkg/Name``)."""
     parts = [text.rstrip("\n")]
@@ -129,22 +125,22 @@ def _concatenated(text: str, dependencies: list[tuple[str, str]]) -> str:
 
 
 @cache
-def schemas() -> dict[str, str]:
-    """The ``ros2msg`` schema text embedded for each type written, dependencies included."""
+def schemas(definitions: str = "") -> dict[str, str]:
+    """The ``ros2msg`` schema text embedded for each type written, dependencies included;
+    ``definitions``: the release's ros2_medkit_msgs (``Release.msg_definitions``)."""
     time = ("builtin_interfaces/Time", TIME_MSG)
+    fault = (f"{MEDKIT_PACKAGE}/Fault", bundled_text("Fault", definitions))
     return {
-        FAULT_EVENT_TYPE: _concatenated(
-            _bundled("FaultEvent"), [(f"{MEDKIT_PACKAGE}/Fault", _bundled("Fault")), time]
-        ),
+        FAULT_EVENT_TYPE: _concatenated(bundled_text("FaultEvent", definitions), [fault, time]),
         TRANSITION_TYPE: _concatenated(TRANSITION_MSG, [time]),
     }
 
 
 @cache
-def message_store() -> Typestore:
+def message_store(definitions: str = "") -> Typestore:
     """A typestore built from exactly the schema text embedded, so data and schema agree."""
     store = get_typestore(Stores.EMPTY)
-    for name, text in schemas().items():
+    for name, text in schemas(definitions).items():
         store.register(types_from_definition(name, Definition("ros2msg", text)))
     return store
 
@@ -162,13 +158,20 @@ def time_fields(t_ns: int) -> tuple[int, int, bool]:
 
 def saturated_stamps(result: Result) -> int:
     """How many stamps of the file ``time_fields`` saturates."""
+    on_wire = _has_last_passed(_definitions(result))
     count = sum(time_fields(t.t_ns)[2] for t in result.transitions)
     for event in result.events:
         fault = event.fault
         for t_ns in (event.t_ns, fault.first_occurred_ns, fault.last_occurred_ns):
             count += time_fields(t_ns)[2]
-        count += time_fields(fault.last_passed_ns)[2]
+        if on_wire:
+            count += time_fields(fault.last_passed_ns)[2]
     return count
+
+
+def _definitions(result: Result) -> str:
+    """The ros2_medkit_msgs of the release the result modelled."""
+    return release_named(result.upstream_release).msg_definitions
 
 
 def _time(store: Typestore, t_ns: int) -> MsgType:
@@ -185,26 +188,35 @@ def _texts(values: tuple[str, ...]) -> list[str]:
     return [_text(value) for value in values]
 
 
-def _fault(store: Typestore, fault: FaultSnapshot) -> MsgType:
-    return store.types[f"{MEDKIT_PACKAGE}/msg/Fault"](
-        fault_code=_text(fault.fault_code),
-        severity=fault.severity,
-        description=_text(fault.description),
-        first_occurred=_time(store, fault.first_occurred_ns),
-        last_occurred=_time(store, fault.last_occurred_ns),
-        last_passed=_time(store, fault.last_passed_ns),
-        occurrence_count=fault.occurrence_count,
-        status=fault.status,
-        reporting_sources=_texts(fault.reporting_sources),
-    )
+def _fault(store: Typestore, fault: FaultSnapshot, definitions: str) -> MsgType:
+    fields: dict[str, Any] = {
+        "fault_code": _text(fault.fault_code),
+        "severity": fault.severity,
+        "description": _text(fault.description),
+        "first_occurred": _time(store, fault.first_occurred_ns),
+        "last_occurred": _time(store, fault.last_occurred_ns),
+        "occurrence_count": fault.occurrence_count,
+        "status": fault.status,
+        "reporting_sources": _texts(fault.reporting_sources),
+    }
+    if _has_last_passed(definitions):  # not on 0.6.0's wire (cd8c19b0, #573)
+        fields["last_passed"] = _time(store, fault.last_passed_ns)
+    return store.types[f"{MEDKIT_PACKAGE}/msg/Fault"](**fields)
 
 
-def fault_event_cdr(event: FaultEvent) -> bytes:
-    """One replayed FaultEvent as the CDR payload the live manager would have published."""
-    store = message_store()
+@cache
+def _has_last_passed(definitions: str) -> bool:
+    fault = message_store(definitions).fielddefs[f"{MEDKIT_PACKAGE}/msg/Fault"]
+    return any(name == "last_passed" for name, _ in fault[1])
+
+
+def fault_event_cdr(event: FaultEvent, definitions: str = "") -> bytes:
+    """One replayed FaultEvent as the CDR payload the live manager would have published, in
+    the layout of the release's ros2_medkit_msgs (``Release.msg_definitions``)."""
+    store = message_store(definitions)
     message = store.types[FAULT_EVENT_TYPE](
         event_type=event.event_type,
-        fault=_fault(store, event.fault),
+        fault=_fault(store, event.fault, definitions),
         timestamp=_time(store, event.t_ns),
         auto_cleared_codes=_texts(event.auto_cleared_codes),
     )
@@ -227,11 +239,12 @@ def transition_cdr(transition: Transition) -> bytes:
 
 def _timeline(result: Result) -> Iterator[tuple[int, int, str, bytes]]:
     """(t_ns, order, topic, payload) in bag-time order; a change before the event it caused."""
+    definitions = _definitions(result)
     transitions = ((t.t_ns, 0, TRANSITIONS_TOPIC, t) for t in result.transitions)
     events = ((e.t_ns, 1, EVENTS_TOPIC, e) for e in result.events)
     for t_ns, order, topic, item in heapq.merge(transitions, events, key=lambda x: x[:2]):
         if topic == EVENTS_TOPIC:
-            yield t_ns, order, topic, fault_event_cdr(cast("FaultEvent", item))
+            yield t_ns, order, topic, fault_event_cdr(cast("FaultEvent", item), definitions)
         else:
             yield t_ns, order, topic, transition_cdr(cast("Transition", item))
 
@@ -241,8 +254,9 @@ def write_mcap_stream(result: Result, stream: BinaryIO | IO[bytes]) -> dict[str,
     writer = cast("_McapWriter", Writer(stream, compression=CompressionType.ZSTD))
     writer.start(profile="ros2", library=f"medkit-replay {__version__}")
     channels: dict[str, int] = {}
+    texts = schemas(_definitions(result))
     for topic, msgtype in ((EVENTS_TOPIC, FAULT_EVENT_TYPE), (TRANSITIONS_TOPIC, TRANSITION_TYPE)):
-        schema = writer.register_schema(msgtype, "ros2msg", schemas()[msgtype].encode("utf-8"))
+        schema = writer.register_schema(msgtype, "ros2msg", texts[msgtype].encode("utf-8"))
         channels[topic] = writer.register_channel(
             topic, "cdr", schema, {"offered_qos_profiles": DEFAULT_QOS}
         )

@@ -321,6 +321,7 @@ def replay_pass(
         rosout_topic=rosout_topic,
         follow=follow,
         tallies=tallies,
+        release=router.release,
     ) as recording:
         meter = (
             Meter(progress, "replay", recording, progress_every) if progress is not None else None

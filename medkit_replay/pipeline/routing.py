@@ -45,6 +45,7 @@ class Router:
         self.log = LogBridge(options.log) if options.log_bridge else None
         self.services = ServiceCallReplayer()
         self.recorded_events: Spool[RecordedEvent] = Spool()
+        self.release = options.release  # its message layouts decode the recording
 
     def requests(self, message: Message) -> Sequence[Request]:
         """What a message without a bridge handler carries: script requests, recorded service
