@@ -285,16 +285,6 @@ class ActionStatusBridge(MessageBridge):
             state.reporter.report_passed(t_ns, state.topic, state.canceled_code, report)
 
 
-def _lost(
-    t_ns: int,
-    origin: Origin,
-    topic: str | None,
-    fault_code: str,
-    event_type: int,
-    severity: int,
-    description: str,
-    source_id: str,
-    /,
-) -> None:
-    """A request sent while the manager's service is not discovered: the reporter's local filter
-    has counted it, and its client drops it (``send_report``, unchanged since 0.6.0)."""
+def _lost(*_request: object) -> None:
+    """A ReportSink for requests sent while the manager's service is not discovered: the
+    reporter's local filter has counted each, and its client drops it (``send_report``)."""

@@ -15,22 +15,20 @@ import pytest
 from medkit_replay.bridges.diagnostic import DiagnosticBridge, DiagnosticBridgeConfig
 from medkit_replay.config.bridges import diagnostic_bridge_config
 from medkit_replay.errors import ConfigError
-from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
+from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
-from tests.bridges.messages import ERROR, OK, STALE, WARN, diag, diag_array
+from tests.bridges.messages import ERROR, OK, STALE, WARN, diag
+from tests.bridges.test_diagnostic_bridge import BRIDGE_FQN, failed, passed, send
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
-    from rosbags.typesys.store import Msg
-
     from medkit_replay.bridges.diagnostic import DiagnosticStatusLike
+    from medkit_replay.model import ReportRequest
     from medkit_replay.releases import Release
 
 S = NS_PER_SEC
 R060, R070 = release_named("0.6.0"), release_named("0.7.0")
-TOPIC = "/diagnostics"
-BRIDGE_FQN = "/diagnostic_bridge"
 
 
 def configured(params: Mapping[str, object], release: Release) -> DiagnosticBridge:
@@ -38,24 +36,13 @@ def configured(params: Mapping[str, object], release: Release) -> DiagnosticBrid
     return DiagnosticBridge(config)
 
 
-def send(bridge: DiagnosticBridge, t_ns: int, *statuses: Msg) -> list[ReportRequest]:
-    return bridge.on_message(t_ns, TOPIC, diag_array(*statuses))
-
-
 def request(
     code: str, t_ns: int, severity: int | None, description: str = "", source: str = BRIDGE_FQN
 ) -> ReportRequest:
     """A FAILED request, or a PASSED one when ``severity`` is None."""
-    return ReportRequest(
-        t_ns=t_ns,
-        fault_code=code,
-        event_type=EventType.PASSED if severity is None else EventType.FAILED,
-        severity=severity or 0,
-        description=description,
-        source_id=source,
-        origin="diagnostic_bridge",
-        topic=TOPIC,
-    )
+    if severity is None:
+        return passed(code, t_ns, source)
+    return failed(code, t_ns, severity, description, source)
 
 
 # --- Ported: DiagnosticBridgeTest.MapToFaultCode_* @bdcc4ed0 took the name alone ----------------

@@ -15,9 +15,9 @@ import pytest
 from medkit_replay.bridges.log import LogBridge, LogBridgeConfig
 from medkit_replay.config.bridges import log_bridge_config
 from medkit_replay.errors import ConfigError
-from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
+from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
-from tests.bridges.messages import log
+from tests.bridges.test_log_bridge import failed, send
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -26,30 +26,12 @@ if TYPE_CHECKING:
 
 S = NS_PER_SEC
 R060, R070 = release_named("0.6.0"), release_named("0.7.0")
-TOPIC = "/rosout"
 WARN, ERROR, FATAL = 30, 40, 50
 
 
 def configured(params: Mapping[str, object], release: Release) -> LogBridge:
     config, _ = log_bridge_config(params, release)
     return LogBridge(config)
-
-
-def send(bridge: LogBridge, t_ns: int, name: str, level: int, msg: str) -> list[ReportRequest]:
-    return bridge.on_message(t_ns, TOPIC, log(name, level, msg))
-
-
-def failed(code: str, t_ns: int, severity: int, description: str, source: str) -> ReportRequest:
-    return ReportRequest(
-        t_ns=t_ns,
-        fault_code=code,
-        event_type=EventType.FAILED,
-        severity=severity,
-        description=description,
-        source_id=source,
-        origin="log_bridge",
-        topic=TOPIC,
-    )
 
 
 # --- Ported: LogBridgeTest.Cooldown_* and ReporterBound_* @bdcc4ed0, read as 0.6.0 reads them ---
@@ -156,29 +138,38 @@ def test_a_cooldown_060_cannot_convert_is_refused(value: float) -> None:
 
 # --- integers narrowed before their checks at 0.6.0 (5ea42890) ---------------------------------
 
-Row = tuple[int, int, "int | None", int, "int | None"]
-"""A value; the 0.6.0 result and the value its warning names (None: silent); the same at 0.7.0."""
-
-FLOORS: list[Row] = [
-    (2**32 + 40, 40, None, 50, 2**32 + 40),
-    (2**32 + 30, 30, None, 50, 2**32 + 30),
-    (2**31 + 10, 0, -(2**31) + 10, 50, 2**31 + 10),
-    (-1, 0, -1, 0, -1),
+FLOOR = "log_bridge: severity_floor={named} out of range [0,50], clamping"
+BOUND = "log_bridge: max_tracked_nodes {named} clamped to {used}"
+NARROWED: list[tuple[str, str, int, int, int | None, int, int | None]] = [
+    # parameter, its warning, a value; the 0.6.0 result and the value its warning names
+    # (None: silent); the same at 0.7.0
+    ("severity_floor", FLOOR, 2**32 + 40, 40, None, 50, 2**32 + 40),
+    ("severity_floor", FLOOR, 2**32 + 30, 30, None, 50, 2**32 + 30),
+    ("severity_floor", FLOOR, 2**31 + 10, 0, -(2**31) + 10, 50, 2**31 + 10),
+    ("severity_floor", FLOOR, -1, 0, -1, 0, -1),
+    ("max_tracked_nodes", BOUND, 0, 1, None, 1, 0),
+    ("max_tracked_nodes", BOUND, -5, 1, None, 1, -5),
+    ("max_tracked_nodes", BOUND, 2**32 + 2, 2, None, 2**31 - 1, 2**32 + 2),
+    ("max_tracked_nodes", BOUND, 2**32, 1, None, 2**31 - 1, 2**32),
 ]
 
 
-@pytest.mark.parametrize(("value", "old", "old_named", "new", "new_named"), FLOORS)
-def test_severity_floor_is_narrowed_before_its_clamp_at_060(
-    value: int, old: int, old_named: int | None, new: int, new_named: int | None
+@pytest.mark.parametrize(
+    ("name", "warning", "value", "old", "old_named", "new", "new_named"), NARROWED
+)
+def test_integers_are_narrowed_before_their_checks_at_060(
+    name: str,
+    warning: str,
+    value: int,
+    old: int,
+    old_named: int | None,
+    new: int,
+    new_named: int | None,
 ) -> None:
-    for release, floor, named in ((R060, old, old_named), (R070, new, new_named)):
-        config, warnings = log_bridge_config({"severity_floor": value}, release)
-        expected = (
-            []
-            if named is None
-            else [f"log_bridge: severity_floor={named} out of range [0,50], clamping"]
-        )
-        assert (config.severity_floor, warnings) == (floor, expected), release.name
+    for release, used, named in ((R060, old, old_named), (R070, new, new_named)):
+        config, warnings = log_bridge_config({name: value}, release)
+        expected = [] if named is None else [warning.format(named=named, used=used)]
+        assert (getattr(config, name), warnings) == (used, expected), release.name
 
 
 def test_a_wrapped_floor_lets_errors_through_at_060() -> None:
@@ -188,26 +179,6 @@ def test_a_wrapped_floor_lets_errors_through_at_060() -> None:
     assert len(send(old, 2, "planner_server", ERROR, "no path")) == 1
     assert send(new, 2, "planner_server", ERROR, "no path") == []  # floor 50: FATAL only
     assert len(send(new, 3, "planner_server", FATAL, "dead")) == 1
-
-
-TRACKED: list[Row] = [
-    (0, 1, None, 1, 0),
-    (-5, 1, None, 1, -5),
-    (2**32 + 2, 2, None, 2**31 - 1, 2**32 + 2),
-    (2**32, 1, None, 2**31 - 1, 2**32),
-]
-
-
-@pytest.mark.parametrize(("value", "old", "old_named", "new", "new_named"), TRACKED)
-def test_max_tracked_nodes_is_narrowed_and_clamped_in_silence_at_060(
-    value: int, old: int, old_named: int | None, new: int, new_named: int | None
-) -> None:
-    for release, bound, named in ((R060, old, old_named), (R070, new, new_named)):
-        config, warnings = log_bridge_config({"max_tracked_nodes": value}, release)
-        expected = (
-            [] if named is None else [f"log_bridge: max_tracked_nodes {named} clamped to {bound}"]
-        )
-        assert (config.max_tracked_nodes, warnings) == (bound, expected), release.name
 
 
 def test_a_wrapped_bound_evicts_reporters_at_060() -> None:
