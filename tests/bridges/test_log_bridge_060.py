@@ -195,3 +195,21 @@ def test_a_wrapped_bound_evicts_reporters_at_060() -> None:
 
 def test_the_defaults_are_the_same() -> None:
     assert log_bridge_config({}, R060) == (LogBridgeConfig(), [])
+
+
+def test_the_parameters_both_releases_share_are_read_alike() -> None:
+    params: dict[str, object] = {
+        "rosout_topic": "/robot/rosout",
+        "severity_floor": 40,
+        "code_prefix": "app log",
+        "exclude_nodes": ["/a"],
+        "include_only_nodes": ["/b"],
+        "max_tracked_nodes": 8,
+        "report_cooldown_sec": 2.5,
+        "exclude_medkit_stack": False,
+        "fault_reporter.local_filtering.default_window_sec": 3.0,
+        "fault_reporter.local_filtering.default_threshold": 2**32 + 2,
+    }
+    old, new = log_bridge_config(params, R060), log_bridge_config(params, R070)
+    assert old == new
+    assert old[0].local_filter.default_threshold == 2  # the reporter narrows at both
