@@ -58,6 +58,25 @@ class Release:
     sanitize_thresholds: bool
     near_misses: bool
     # -- the bridges and the reporter (bridges, config) --
+    diagnostic_keyvalue_codes: bool
+    """The diagnostic bridge reads ``keyvalue_codes`` (a status's code from one of its
+    KeyValues; 71b1a79e, #527). False: the parameter does not exist, codes come from names."""
+    diagnostic_hardware_id_sources: bool
+    """The diagnostic bridge reads ``use_hardware_id_as_source_id`` and ``max_tracked_sources``
+    (one reporter per source; 56d85b83, #622). False: neither exists, every status reports
+    as the bridge itself through one reporter."""
+    bridge_ints_read_as_int64: bool
+    """The log and action status bridges read ``severity_floor``, ``max_tracked_nodes``,
+    ``aborted_severity`` and ``dedup_capacity`` as int64 and range-check them before narrowing
+    (5ea42890, 26611619). False: narrowed to a 32-bit int first, so a large value wraps."""
+    log_bridge_checks_coercions: bool
+    """The log bridge replaces a negative or non-finite ``report_cooldown_sec`` by 5.0 and warns
+    of it and of a clamped ``max_tracked_nodes`` (91035bfe). False: a negative cooldown becomes
+    0.0 (off), both silently; a non-finite one reaches an undefined conversion."""
+    action_bridge_defers_delivery: bool
+    """The action status bridge keeps a verdict it cannot deliver pending and retries it every
+    ``retry_period_sec`` (ab3a90f8, 243a2f4a). False: the verdict is acted on and committed at
+    once, and the request is lost while the manager's service is not ready."""
     # -- messages, freeze frames and black-box recordings (evidence, outputs, parity) --
     msg_definitions: str
     """Where this release's ros2_medkit_msgs differ from the newest: a folder under
@@ -114,6 +133,11 @@ RELEASES: dict[str, Release] = {
             sanitize_thresholds=False,
             near_misses=False,
             # -- bridges --
+            diagnostic_keyvalue_codes=False,
+            diagnostic_hardware_id_sources=False,
+            bridge_ints_read_as_int64=False,
+            log_bridge_checks_coercions=False,
+            action_bridge_defers_delivery=False,
             # -- evidence --
             msg_definitions="0.6.0",
             freeze_frame_row=False,
@@ -143,6 +167,11 @@ RELEASES: dict[str, Release] = {
             sanitize_thresholds=True,
             near_misses=True,
             # -- bridges --
+            diagnostic_keyvalue_codes=True,
+            diagnostic_hardware_id_sources=True,
+            bridge_ints_read_as_int64=True,
+            log_bridge_checks_coercions=True,
+            action_bridge_defers_delivery=True,
             # -- evidence --
             msg_definitions="",
             freeze_frame_row=True,

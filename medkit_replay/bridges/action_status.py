@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Protocol, cast
 from medkit_replay.bridges.base import FaultReporter, MessageBridge, RequestList, passes_lists
 from medkit_replay.bridges.codes import action_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
+from medkit_replay.releases import Release, default_release
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
@@ -150,7 +151,8 @@ class ActionStatusBridge(MessageBridge):
     is an action. A reporter (with its fixed source_id) is made on the first status array of an
     action: the server node from ``action_sources`` if mapped, else the action name (§1.4, §10.3).
     The manager's service is ready unless ``service_ready`` is set false; while it is, verdicts stay
-    pending until :meth:`reconcile_pending` runs with the service back (upstream's retry timer).
+    pending until :meth:`reconcile_pending` runs with the service back (upstream's retry timer),
+    or, for a ``release`` without that retry (0.6.0), are acted on at once and lost.
     """
 
     name = NODE_NAME
@@ -161,11 +163,16 @@ class ActionStatusBridge(MessageBridge):
         config: ActionStatusBridgeConfig | None = None,
         *,
         action_sources: Mapping[str, str] | None = None,
+        release: Release | None = None,
     ) -> None:
         self.config = config or ActionStatusBridgeConfig()
         self.action_sources: dict[str, str] = dict(action_sources or {})
         self.service_ready = True
         self._actions: dict[str, _Action] = {}
+        # Where a verdict goes while the service is down: nowhere yet (None: it stays pending),
+        # or, without deferred delivery, through the reporter to a client that drops it.
+        defers = (release or default_release()).action_bridge_defers_delivery
+        self._unready_sink: ReportSink | None = None if defers else _lost
 
     def is_eligible(self, action_name: str) -> bool:
         """``include_only_actions`` then ``exclude_actions``, as unanchored substrings."""
@@ -223,12 +230,12 @@ class ActionStatusBridge(MessageBridge):
             if action in keep:
                 continue
             state = self._actions.pop(action)
-            if (
-                state.reported is NetState.FAILED
-                and self.config.heal_on_succeeded
-                and self.service_ready
-            ):
+            if state.reported is not NetState.FAILED or not self.config.heal_on_succeeded:
+                continue
+            if self.service_ready:
                 self._heal(t_ns, state, out)
+            elif self._unready_sink is not None:
+                self._heal(t_ns, state, self._unready_sink)
         return out
 
     def action_state(self, action_name: str) -> ActionView | None:
@@ -256,7 +263,9 @@ class ActionStatusBridge(MessageBridge):
         if desired is NetState.UNKNOWN or desired is (state.reported or NetState.HEALTHY):
             return
         if not self.service_ready:
-            return  # stays pending; nothing is committed
+            if self._unready_sink is None:
+                return  # stays pending; nothing is committed
+            report = self._unready_sink
         state.reported = desired
         if desired is NetState.HEALTHY:
             self._heal(t_ns, state, report)
@@ -274,3 +283,8 @@ class ActionStatusBridge(MessageBridge):
         state.reporter.report_passed(t_ns, state.topic, state.aborted_code, report)
         if self.config.canceled_is_fault:
             state.reporter.report_passed(t_ns, state.topic, state.canceled_code, report)
+
+
+def _lost(*_request: object) -> None:
+    """A ReportSink for requests sent while the manager's service is not discovered: the
+    reporter's local filter has counted each, and its client drops it (``send_report``)."""

@@ -73,14 +73,14 @@ def replay_options(
     log_enabled, action_sources = located(own, read_own)
     diag_params = params.node("diagnostic_bridge")
     diagnostic, diag_warnings = located(
-        diag_params, lambda: diagnostic_bridge_config(values(diag_params))
+        diag_params, lambda: diagnostic_bridge_config(values(diag_params), release)
     )
     action_params = params.node("action_status_bridge")
     action, action_warnings = located(
-        action_params, lambda: action_status_bridge_config(values(action_params))
+        action_params, lambda: action_status_bridge_config(values(action_params), release)
     )
     log_params = params.node("log_bridge")
-    log, log_warnings = located(log_params, lambda: log_bridge_config(values(log_params)))
+    log, log_warnings = located(log_params, lambda: log_bridge_config(values(log_params), release))
     warnings += diag_warnings + action_warnings + log_warnings
     return (
         ReplayOptions(

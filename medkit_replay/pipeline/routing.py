@@ -40,7 +40,7 @@ class Router:
     def __init__(self, options: ReplayOptions) -> None:
         self.diagnostic = DiagnosticBridge(options.diagnostic)
         self.action = ActionStatusBridge(
-            options.action_status, action_sources=options.action_sources
+            options.action_status, action_sources=options.action_sources, release=options.release
         )
         self.log = LogBridge(options.log) if options.log_bridge else None
         self.services = ServiceCallReplayer()

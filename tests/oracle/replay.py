@@ -28,6 +28,7 @@ from medkit_replay.bridges.log import LogBridge
 from medkit_replay.bridges.service_calls import ServiceCallReplayer
 from medkit_replay.config.fault_manager import fault_manager_config
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
@@ -75,12 +76,15 @@ _BRIDGES = ("diagnostic_bridge", "action_status_bridge", "log_bridge")
 def oracle_sections(inputs: Sequence[Path], configs: Sequence[Path]) -> dict[str, object]:
     """The engine's report sections for ``inputs`` under ``configs``, computed plainly."""
     params = load_parameters(configs)
-    manager_config, _ = fault_manager_config(params.node("fault_manager"))
-    options, _ = replay_options(params)
+    release = release_of(params)
+    manager_config, _ = fault_manager_config(params.node("fault_manager"), release)
+    options, _ = replay_options(params, release)
     manager = FaultManager(manager_config)  # records as objects in plain lists
     timeline = Timeline(manager)
     diagnostic = DiagnosticBridge(options.diagnostic)
-    action = ActionStatusBridge(options.action_status, action_sources=options.action_sources)
+    action = ActionStatusBridge(
+        options.action_status, action_sources=options.action_sources, release=release
+    )
     log = LogBridge(options.log) if options.log_bridge else None
     services = ServiceCallReplayer()
     recorded = _recorded_codes(inputs)
