@@ -251,11 +251,11 @@ def _reads(params: ParameterSet, node: str, name: str) -> bool:
     nodes.setdefault(node, {})[name] = probe
     probed = ParameterSet(nodes, params.files, params.named | {node})
     try:
-        release_of(probed)
+        release = release_of(probed)  # which parameters exist depends on the variant's release
         if node == "fault_manager":
-            fault_manager_config(probed.node(node))
+            fault_manager_config(probed.node(node), release)
         else:
-            replay_options(probed)
+            replay_options(probed, release)
     except ConfigError as err:
         return err.parameter == name
     return False

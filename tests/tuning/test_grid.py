@@ -89,6 +89,25 @@ def test_an_unread_name_is_refused(tmp_path: Path) -> None:
         check_names(base, varies, make_grid(varies))
 
 
+def test_a_name_only_another_release_reads_is_refused(tmp_path: Path) -> None:
+    """Which parameters exist follows each variant's release: 0.6.0's diagnostic bridge and
+    fault manager declare neither keyvalue_codes nor near_miss.max_per_fault."""
+    old = tmp_path / "old.yaml"
+    old.write_text('medkit_replay:\n  ros__parameters:\n    upstream_release: "0.6.0"\n')
+    base = load_parameters([old])
+    for key in ("diagnostic_bridge.keyvalue_codes=[id]", "fault_manager.near_miss.max_per_fault=5"):
+        varies = [parse_vary(key)]
+        with pytest.raises(ConfigError, match="reads no parameter"):
+            check_names(base, varies, make_grid(varies))
+        check_names(load_parameters([]), varies, make_grid(varies))  # read at the newest
+    # A grid that also varies the release reads the name in its 0.7.0 variants.
+    varies = [
+        parse_vary("medkit_replay.upstream_release=0.6.0,0.7.0"),
+        parse_vary("diagnostic_bridge.keyvalue_codes=[id]"),
+    ]
+    check_names(base, varies, make_grid(varies))
+
+
 def test_the_variant_file_reproduces_the_variant(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
