@@ -151,8 +151,9 @@ def test_the_terminal_summary_says_how_much_was_fetched(tmp_path: Path) -> None:
         done = cli("analyze", f"{base}/camera_bag")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
-    assert lines[1] == f"  {base}/camera_bag (mcap)"
-    assert lines[2].startswith("  fetched ") and " of 9." in lines[2] and "%)" in lines[2]
+    at = lines.index(f"  {base}/camera_bag (mcap)")  # below the header and the release line
+    fetched = lines[at + 1]
+    assert fetched.startswith("  fetched ") and " of 9." in fetched and "%)" in fetched
     local = cli("analyze", str(bag))
     assert "fetched" not in local.stdout
 
