@@ -165,6 +165,22 @@ def _collect(
             raise ConfigError(msg, path=str(path), line=key_node.start_mark.line + 1)
 
 
+def _wrong_kind(err: ConfigError, root: yaml.MappingNode) -> ConfigError:
+    """The error for a file that is not a parameter file, saying which kind it looks like."""
+    from yaml.constructor import ConstructorError, SafeConstructor  # noqa: PLC0415
+
+    from medkit_replay.config.kinds import belongs, guess_kind  # noqa: PLC0415
+
+    try:
+        kind = guess_kind(SafeConstructor().construct_document(root))
+    except ConstructorError:
+        kind = None
+    if kind is None or kind == "parameters":
+        return err
+    problem = f"{belongs(kind, '--config')} ({err.problem})"
+    return ConfigError(problem, path=err.path, line=err.line)
+
+
 def parse_value(text: str, name: str, where: str) -> ParamValue:
     """One parameter value written on a command line, typed as in a parameter file (``-3`` an
     integer, ``3.0`` a double, ``'3'`` a string, ``[a, b]`` an array).
@@ -191,14 +207,25 @@ def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     except UnicodeDecodeError as err:
         at = data.count(b"\n", 0, err.start) + 1
         raise ConfigError(f"cannot read config file: {err}", path=str(path), line=at) from None
-    root = compose_config(text, str(path))
+    try:
+        root = compose_config(text, str(path))
+    except ConfigError as err:
+        from medkit_replay.config.kinds import belongs, guess_text_kind  # noqa: PLC0415
+
+        if guess_text_kind(text, str(path)) != "graph":
+            raise
+        problem = f"{belongs('graph', '--config')} ({err.problem})"
+        raise ConfigError(problem, path=str(path)) from None
     if root is None:
         return []
     if not isinstance(root, yaml.MappingNode):
         msg = "expected a ROS 2 parameter file: node names mapping to ros__parameters"
         raise ConfigError(msg, path=str(path), line=root.start_mark.line + 1)
     found: list[tuple[str, yaml.Node]] = []
-    _collect(root, path, [], found)
+    try:
+        _collect(root, path, [], found)
+    except ConfigError as err:
+        raise _wrong_kind(err, root) from None
     result: list[tuple[str, NodeParams]] = []
     for node_key, params_node in found:
         params: NodeParams = {}
