@@ -1,0 +1,119 @@
+"""Names in parameter files that upstream would ignore: node names near a modelled node, and
+parameters a modelled node does not declare at the release modelled (config/declared.py).
+
+Warnings only: upstream ignores both, and so does the replay.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from medkit_replay.config.declared import DECLARED
+from medkit_replay.config.params import KNOWN_NODES
+from medkit_replay.releases import RELEASES
+from medkit_replay.yaml_bounds import shown_text
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+    from pathlib import Path
+
+    from medkit_replay.config.params import ParameterSet
+    from medkit_replay.releases import Release
+
+NODE_CUTOFF = 0.8
+"""A node name is "near" a modelled node when difflib's ratio of the two is at least this
+(``fault_manger`` 0.96, ``diagnostics_bridge`` 0.97; ``diagnostic_aggregator`` 0.68 is not)."""
+PARAMETER_CUTOFF = 0.6
+"""The closest declared name is suggested when difflib's ratio is at least this."""
+REPLAY_NODE = "medkit_replay"
+
+
+@dataclass(frozen=True, slots=True)
+class UnknownKey:
+    """One name upstream ignores, where it is written, and the closest known name."""
+
+    path: Path
+    line: int
+    problem: str
+    suggestion: str | None
+
+    def __str__(self) -> str:
+        return f"{self.path}:{self.line}: {self.problem}"
+
+
+def declares(node: str, name: str, release: str) -> bool:
+    """Whether ``node`` declares (or reads) parameter ``name`` at ``release``."""
+    known = DECLARED[release][node]
+    return name in known or any(
+        k.endswith(".*") and name.startswith(k[:-1]) and len(name) > len(k) - 1 for k in known
+    )
+
+
+def closest(name: str, candidates: Iterable[str], cutoff: float) -> str | None:
+    """The candidate nearest ``name`` (a case-only difference first), if near enough."""
+    names = sorted(candidates)
+    folded = [c for c in names if c.lower() == name.lower()]
+    close = folded or difflib.get_close_matches(name, names, n=1, cutoff=cutoff)
+    return close[0] if close else None
+
+
+def near_node(name: str) -> str | None:
+    """The modelled node ``name`` is near (and not equal to), or None."""
+    return None if name in KNOWN_NODES else closest(name, KNOWN_NODES, NODE_CUTOFF)
+
+
+def undeclared(node: str, name: str, release: Release) -> tuple[str, str | None] | None:
+    """Why ``node`` ignores ``name`` at ``release`` and the closest declared name; None when
+    it declares it."""
+    if declares(node, name, release.name):
+        return None
+    quoted = repr(shown_text(name))
+    order = list(RELEASES)
+    others = [r for r in order if declares(node, name, r)]
+    if others:
+        newer = [r for r in others if order.index(r) > order.index(release.name)]
+        span = f"from {newer[0]} on" if newer else f"up to {others[-1]}"
+        problem = (
+            f"{node} has no parameter {quoted} at ros2_medkit {release.name}: "
+            f"it is declared {span}; {release.name} ignores it"
+        )
+        return problem, None
+    suggestion = closest(name, _plain(DECLARED[release.name][node]), PARAMETER_CUTOFF)
+    hint = f" (did you mean {suggestion!r}?)" if suggestion else ""
+    if node == REPLAY_NODE:
+        return f"{node} has no parameter {quoted}{hint}; the replay ignores it", suggestion
+    problem = f"{node} has no parameter {quoted} at ros2_medkit {release.name}{hint}; "
+    return problem + "upstream ignores it", suggestion
+
+
+def _plain(names: frozenset[str]) -> list[str]:
+    return [n for n in names if not n.endswith(".*")]
+
+
+def unknown_keys(params: ParameterSet, release: Release) -> list[UnknownKey]:
+    """Every ignored name in the parameter files, in file order.
+
+    Only sections naming a node outright are looked at: a wildcard section (``/**``) is for
+    every node of a robot, and a node name far from the modelled ones is another node's.
+    """
+    found: list[UnknownKey] = []
+    for section in params.sections:
+        node = section.node_name
+        if "*" in node:
+            continue
+        if node not in KNOWN_NODES:
+            near = near_node(node)
+            if near is not None:
+                problem = (
+                    f"node {shown_text(node)!r} is not a node the replay models; "
+                    f"did you mean {near!r}?"
+                )
+                found.append(UnknownKey(section.path, section.line, problem, near))
+            continue
+        for name, param in section.params.items():
+            why = undeclared(node, name, release)
+            if why is not None:
+                found.append(UnknownKey(param.path, param.line, *why))
+    return found
