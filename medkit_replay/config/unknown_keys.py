@@ -6,17 +6,16 @@ Warnings only: upstream ignores both, and so does the replay.
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from medkit_replay.config.declared import DECLARED
 from medkit_replay.config.params import KNOWN_NODES
 from medkit_replay.releases import RELEASES
+from medkit_replay.text import closest
 from medkit_replay.yaml_bounds import shown_text
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
     from pathlib import Path
 
     from medkit_replay.config.params import ParameterSet
@@ -25,8 +24,6 @@ if TYPE_CHECKING:
 NODE_CUTOFF = 0.8
 """A node name is "near" a modelled node when difflib's ratio of the two is at least this
 (``fault_manger`` 0.96, ``diagnostics_bridge`` 0.97; ``diagnostic_aggregator`` 0.68 is not)."""
-PARAMETER_CUTOFF = 0.6
-"""The closest declared name is suggested when difflib's ratio is at least this."""
 REPLAY_NODE = "medkit_replay"
 
 
@@ -51,14 +48,6 @@ def declares(node: str, name: str, release: str) -> bool:
     )
 
 
-def closest(name: str, candidates: Iterable[str], cutoff: float) -> str | None:
-    """The candidate nearest ``name`` (a case-only difference first), if near enough."""
-    names = sorted(candidates)
-    folded = [c for c in names if c.lower() == name.lower()]
-    close = folded or difflib.get_close_matches(name, names, n=1, cutoff=cutoff)
-    return close[0] if close else None
-
-
 def near_node(name: str) -> str | None:
     """The modelled node ``name`` is near (and not equal to), or None."""
     return None if name in KNOWN_NODES else closest(name, KNOWN_NODES, NODE_CUTOFF)
@@ -80,7 +69,7 @@ def undeclared(node: str, name: str, release: Release) -> tuple[str, str | None]
             f"it is declared {span}; {release.name} ignores it"
         )
         return problem, None
-    suggestion = closest(name, _plain(DECLARED[release.name][node]), PARAMETER_CUTOFF)
+    suggestion = closest(name, _plain(DECLARED[release.name][node]))
     hint = f" (did you mean {suggestion!r}?)" if suggestion else ""
     if node == REPLAY_NODE:
         return f"{node} has no parameter {quoted}{hint}; the replay ignores it", suggestion
@@ -89,7 +78,7 @@ def undeclared(node: str, name: str, release: Release) -> tuple[str, str | None]
 
 
 def _plain(names: frozenset[str]) -> list[str]:
-    return [n for n in names if not n.endswith(".*")]
+    return sorted(n for n in names if not n.endswith(".*"))
 
 
 def unknown_keys(params: ParameterSet, release: Release) -> list[UnknownKey]:
