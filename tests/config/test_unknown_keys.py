@@ -13,7 +13,7 @@ from medkit_replay.config.declared import DECLARED, ROS_PARAMETERS
 from medkit_replay.config.params import KNOWN_NODES, load_parameters
 from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
-from medkit_replay.config.unknown_keys import UnknownKey, unknown_keys
+from medkit_replay.config.unknown_keys import MAX_LISTED, UnknownKey, unknown_keys
 from medkit_replay.releases import RELEASES, release_named
 from tests.config import declared_upstream
 
@@ -229,4 +229,15 @@ def test_the_table_is_what_upstream_declares() -> None:
     )
     assert "retry_period_sec" not in declared_upstream.upstream_names(
         git_dir, "bdcc4ed0", "action_status_bridge"
+    )
+
+
+def test_past_the_first_hundred_the_rest_are_counted(tmp_path: Path) -> None:
+    names = "".join(f"    thresh_{n:04d}: 1\n" for n in range(MAX_LISTED + 250))
+    listed = found(tmp_path, f"fault_manager:\n  ros__parameters:\n{names}")
+    assert len(listed) == MAX_LISTED + 1
+    assert listed[MAX_LISTED - 1].problem.startswith("fault_manager has no parameter 'thresh_0099'")
+    assert str(listed[-1]) == (
+        f"{tmp_path / 'params.yaml'}:{MAX_LISTED + 3}: 250 more names upstream ignores from "
+        f"here on (the first {MAX_LISTED} are listed)"
     )
