@@ -7,9 +7,14 @@ U+061C) or end a line where a reader does not expect it (U+2028, U+2029).
 
 from __future__ import annotations
 
+import difflib
 import re
+from typing import TYPE_CHECKING
 
 from medkit_replay.model import NS_PER_SEC, SEVERITY_NAMES
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 _BIDI = "\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
 _UNPRINTABLE = re.compile(f"[\\x00-\\x1f\\x7f-\\x9f\\u2028\\u2029{_BIDI}\\ud800-\\udfff]")
@@ -64,3 +69,11 @@ def seconds(ns: float) -> str:
 def severity_name(severity: int) -> str:
     """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; any other number as itself."""
     return SEVERITY_NAMES[severity] if 0 <= severity < len(SEVERITY_NAMES) else str(severity)
+
+
+def closest(name: str, known: Sequence[str], cutoff: float = 0.6) -> str | None:
+    """The known name ``name`` most likely misspells: one differing only in case, else the
+    nearest by difflib's ratio when at least ``cutoff``; None when none is near."""
+    folded = [k for k in known if k.lower() == name.lower()]
+    close = folded or difflib.get_close_matches(name, known, n=1, cutoff=cutoff)
+    return close[0] if close else None

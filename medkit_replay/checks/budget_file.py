@@ -8,7 +8,6 @@ and line (exit 2).
 
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -38,6 +37,7 @@ from medkit_replay.checks.budget import (
 )
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
+from medkit_replay.text import closest
 from medkit_replay.yaml_bounds import (
     compose_config,
     shown_text,
@@ -189,10 +189,9 @@ def _kind(node: yaml.Node) -> str:
 
 
 def _suggest(key: str, allowed: Sequence[str]) -> str:
-    folded = [a for a in allowed if a.lower() == key.lower()]
-    close = folded or difflib.get_close_matches(key, allowed, n=1, cutoff=0.6)
+    close = closest(key, allowed)
     if close:
-        return f" (did you mean '{close[0]}'?)"
+        return f" (did you mean '{close}'?)"
     return f" (expected one of: {', '.join(allowed)})"
 
 

@@ -151,18 +151,40 @@ def _node_matches(pattern: str, node_name: str) -> bool:
 
 
 def _collect(
-    node: yaml.MappingNode, path: Path, keys: list[str], found: list[tuple[str, yaml.Node]]
+    node: yaml.MappingNode,
+    path: Path,
+    keys: list[str],
+    found: list[tuple[str, int, yaml.Node]],
+    line: int = 1,
 ) -> None:
+    """Every ``ros__parameters`` map with its node key and the line of that key."""
     for key_node, value_node in node.value:
         key = _key(key_node, path)
         if key == "ros__parameters":
-            found.append(("/" + "/".join(k.strip("/") for k in keys), value_node))
+            name = "/" + "/".join(k.strip("/") for k in keys)
+            found.append((name, line if keys else key_node.start_mark.line + 1, value_node))
         elif isinstance(value_node, yaml.MappingNode):
-            _collect(value_node, path, [*keys, key], found)
+            _collect(value_node, path, [*keys, key], found, key_node.start_mark.line + 1)
         else:
             where = shown_text("/".join([*keys, key]))
             msg = f"{where}: expected a node name holding ros__parameters"
             raise ConfigError(msg, path=str(path), line=key_node.start_mark.line + 1)
+
+
+def _wrong_kind(err: ConfigError, root: yaml.MappingNode) -> ConfigError:
+    """The error for a file that is not a parameter file, saying which kind it looks like."""
+    from yaml.constructor import ConstructorError, SafeConstructor  # noqa: PLC0415
+
+    from medkit_replay.config.kinds import belongs, guess_kind  # noqa: PLC0415
+
+    try:
+        kind = guess_kind(SafeConstructor().construct_document(root))
+    except ConstructorError:
+        kind = None
+    if kind is None or kind == "parameters":
+        return err
+    problem = f"{belongs(kind, '--config')} ({err.problem})"
+    return ConfigError(problem, path=err.path, line=err.line)
 
 
 def parse_value(text: str, name: str, where: str) -> ParamValue:
@@ -178,8 +200,29 @@ def parse_value(text: str, name: str, where: str) -> ParamValue:
     return _value(node, Path(where), name)
 
 
+@dataclass(frozen=True, slots=True)
+class Section:
+    """One node section of a parameter file: its key (``/ns/node``, ``/**``), where the key is
+    written, and its flat parameters."""
+
+    key: str
+    path: Path
+    line: int
+    params: NodeParams
+
+    @property
+    def node_name(self) -> str:
+        """The key's last segment: the node name, or a wildcard (``**``, ``fault_*``)."""
+        return self.key.rstrip("/").rsplit("/", 1)[-1]
+
+
 def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     """Parse one ROS 2 parameter file into (node key, flat parameters) in file order."""
+    return [(section.key, section.params) for section in load_sections(path)]
+
+
+def load_sections(path: Path) -> list[Section]:
+    """Parse one ROS 2 parameter file into its node sections, in file order."""
     try:
         data = read_limited(path)
     except FileNotFoundError:
@@ -191,23 +234,34 @@ def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
     except UnicodeDecodeError as err:
         at = data.count(b"\n", 0, err.start) + 1
         raise ConfigError(f"cannot read config file: {err}", path=str(path), line=at) from None
-    root = compose_config(text, str(path))
+    try:
+        root = compose_config(text, str(path))
+    except ConfigError as err:
+        from medkit_replay.config.kinds import belongs, guess_text_kind  # noqa: PLC0415
+
+        if guess_text_kind(text, str(path)) != "graph":
+            raise
+        problem = f"{belongs('graph', '--config')} ({err.problem})"
+        raise ConfigError(problem, path=str(path)) from None
     if root is None:
         return []
     if not isinstance(root, yaml.MappingNode):
         msg = "expected a ROS 2 parameter file: node names mapping to ros__parameters"
         raise ConfigError(msg, path=str(path), line=root.start_mark.line + 1)
-    found: list[tuple[str, yaml.Node]] = []
-    _collect(root, path, [], found)
-    result: list[tuple[str, NodeParams]] = []
-    for node_key, params_node in found:
+    found: list[tuple[str, int, yaml.Node]] = []
+    try:
+        _collect(root, path, [], found)
+    except ConfigError as err:
+        raise _wrong_kind(err, root) from None
+    result: list[Section] = []
+    for node_key, line, params_node in found:
         params: NodeParams = {}
         if isinstance(params_node, yaml.MappingNode):
             _flatten(params_node, path, "", params)
         elif not (isinstance(params_node, yaml.ScalarNode) and params_node.value in _NULL):
             msg = f"{shown_text(node_key)}: ros__parameters must be a map"
             raise ConfigError(msg, path=str(path), line=params_node.start_mark.line + 1)
-        result.append((node_key, params))
+        result.append(Section(node_key, path, line, params))
     return result
 
 
@@ -218,6 +272,8 @@ class ParameterSet:
     nodes: Mapping[str, NodeParams]
     files: tuple[Path, ...]
     named: frozenset[str] = frozenset()
+    sections: tuple[Section, ...] = ()
+    """Every node section of the files as written, for checks of names (config/unknown_keys.py)."""
 
     def node(self, name: str) -> NodeParams:
         """Parameters of one node (empty when the config never names it)."""
@@ -233,12 +289,14 @@ def load_parameters(paths: Iterable[Path]) -> ParameterSet:
     nodes: dict[str, NodeParams] = {}
     files: list[Path] = []
     named: set[str] = set()
+    sections: list[Section] = []
     for path in paths:
         files.append(path)
-        for node_key, params in load_parameter_file(path):
+        for section in load_sections(path):
+            sections.append(section)
             for name in KNOWN_NODES:
-                if _node_matches(node_key, name):
-                    nodes.setdefault(name, {}).update(params)
-                    if node_key.rstrip("/").rsplit("/", 1)[-1] == name:
+                if _node_matches(section.key, name):
+                    nodes.setdefault(name, {}).update(section.params)
+                    if section.node_name == name:
                         named.add(name)
-    return ParameterSet(nodes, tuple(files), frozenset(named))
+    return ParameterSet(nodes, tuple(files), frozenset(named), tuple(sections))

@@ -18,6 +18,7 @@ from medkit_replay.config.bridges import (
 )
 from medkit_replay.config.nodes import located, values
 from medkit_replay.config.reader import ParameterReader
+from medkit_replay.config.unknown_keys import unknown_keys
 from medkit_replay.errors import ConfigError
 from medkit_replay.releases import Release, default_release
 
@@ -51,9 +52,9 @@ def replay_options(
     params: ParameterSet, release: Release | None = None
 ) -> tuple[ReplayOptions, list[str]]:
     """Read ``medkit_replay`` and the three bridge nodes from the merged parameter files, for
-    ``release`` (the newest when None)."""
+    ``release`` (the newest when None); the warnings start with the names upstream ignores."""
     release = release or default_release()
-    warnings: list[str] = []
+    warnings = [str(unknown) for unknown in unknown_keys(params, release)]
     own = params.node("medkit_replay")
 
     def read_own() -> tuple[bool, dict[str, str]]:

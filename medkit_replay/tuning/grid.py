@@ -19,6 +19,7 @@ from medkit_replay.config.params import KNOWN_NODES, Param, ParameterSet, parse_
 from medkit_replay.config.referenced import FILE_PARAMETERS
 from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
+from medkit_replay.config.unknown_keys import near_node, undeclared
 from medkit_replay.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -138,7 +139,9 @@ def parse_vary(spec: str) -> Vary:
             "expected NODE.PARAM=V1,V2,... (e.g. fault_manager.healing_threshold=1,3)", path=where
         )
     if node not in KNOWN_NODES:
-        raise ConfigError(f"unknown node {node!r} (known: {', '.join(KNOWN_NODES)})", path=where)
+        near = near_node(node)
+        hint = f"did you mean {near!r}?" if near else f"known: {', '.join(KNOWN_NODES)}"
+        raise ConfigError(f"unknown node {node!r} ({hint})", path=where)
     texts = split_values(listed)
     if len(set(texts)) != len(texts):
         raise ConfigError("a value is listed twice", path=where)
@@ -208,7 +211,7 @@ def variant_parameters(base: ParameterSet, settings: Sequence[Setting]) -> Param
     for setting in settings:
         nodes.setdefault(setting.node, {})[setting.name] = Param(setting.value, VARY_SOURCE, 0)
     named = base.named | {s.node for s in settings}
-    return ParameterSet(nodes, base.files, frozenset(named))
+    return ParameterSet(nodes, base.files, frozenset(named), base.sections)
 
 
 @dataclass(frozen=True, slots=True)
@@ -279,10 +282,26 @@ def check_names(base: ParameterSet, varies: Sequence[Vary], grid: Sequence[Varia
             for v in grid
         ):
             continue
-        raise ConfigError(
-            f"{vary.node} reads no parameter {vary.name!r} (a typo, or unused with this config)",
-            path=f"--vary {vary.key}",
+        problem = _undeclared(base, vary, grid) or (
+            f"{vary.node} reads no parameter {vary.name!r} (a typo, or unused with this config)"
         )
+        raise ConfigError(problem, path=f"--vary {vary.key}")
+
+
+def _undeclared(base: ParameterSet, vary: Vary, grid: Sequence[Variant]) -> str | None:
+    """Why upstream ignores a varied name at the first variant's release, when it is declared
+    at none of the variants' releases (config/declared.py); None otherwise."""
+    problems: list[str] = []
+    for variant in grid:
+        try:
+            release = release_of(variant_parameters(base, variant.settings))
+        except ConfigError:  # a bad release is said by the variant's own check
+            return None
+        why = undeclared(vary.node, vary.name, release)
+        if why is None:
+            return None
+        problems.append(why[0])
+    return problems[0] if problems else None
 
 
 def yaml_value(value: ParamValue) -> str:

@@ -80,13 +80,27 @@ def test_an_unread_name_is_refused(tmp_path: Path) -> None:
     varies = [parse_vary("fault_manager.healing_treshold=1")]
     with pytest.raises(
         ConfigError,
-        match=r"--vary fault_manager.healing_treshold: fault_manager reads no parameter",
+        match=r"--vary fault_manager.healing_treshold: fault_manager has no parameter "
+        r"'healing_treshold' at ros2_medkit 0.7.0 \(did you mean 'healing_threshold'\?\)",
     ):
         check_names(base, varies, make_grid(varies))
     # Read only with a correlation file: refused without one.
     varies = [parse_vary("fault_manager.correlation.cleanup_interval_sec=1.0")]
     with pytest.raises(ConfigError, match="unused with this config"):
         check_names(base, varies, make_grid(varies))
+    # Declared upstream but not modelled (it changes nothing in a replay): refused as unread.
+    varies = [parse_vary("fault_manager.database_path=/tmp/faults.db")]
+    with pytest.raises(ConfigError, match="fault_manager reads no parameter 'database_path'"):
+        check_names(base, varies, make_grid(varies))
+
+
+def test_a_typo_in_a_varied_node_is_refused_with_the_node_meant() -> None:
+    with pytest.raises(
+        ConfigError, match=r"unknown node 'fault_manger' \(did you mean 'fault_manager'\?\)"
+    ):
+        parse_vary("fault_manger.healing_threshold=1")
+    with pytest.raises(ConfigError, match=r"unknown node 'planner' \(known: fault_manager, "):
+        parse_vary("planner.healing_threshold=1")
 
 
 def test_a_name_only_another_release_reads_is_refused(tmp_path: Path) -> None:
@@ -97,7 +111,7 @@ def test_a_name_only_another_release_reads_is_refused(tmp_path: Path) -> None:
     base = load_parameters([old])
     for key in ("diagnostic_bridge.keyvalue_codes=[id]", "fault_manager.near_miss.max_per_fault=5"):
         varies = [parse_vary(key)]
-        with pytest.raises(ConfigError, match="reads no parameter"):
+        with pytest.raises(ConfigError, match=r"declared from 0\.7\.0 on; 0\.6\.0 ignores it"):
             check_names(base, varies, make_grid(varies))
         check_names(load_parameters([]), varies, make_grid(varies))  # read at the newest
     # A grid that also varies the release reads the name in its 0.7.0 variants.
