@@ -7,9 +7,14 @@ U+061C) or end a line where a reader does not expect it (U+2028, U+2029).
 
 from __future__ import annotations
 
+import difflib
 import re
+from typing import TYPE_CHECKING
 
 from medkit_replay.model import NS_PER_SEC, SEVERITY_NAMES
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 _BIDI = "\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
 _UNPRINTABLE = re.compile(f"[\\x00-\\x1f\\x7f-\\x9f\\u2028\\u2029{_BIDI}\\ud800-\\udfff]")
@@ -64,3 +69,20 @@ def seconds(ns: float) -> str:
 def severity_name(severity: int) -> str:
     """``INFO``, ``WARN``, ``ERROR``, ``CRITICAL``; any other number as itself."""
     return SEVERITY_NAMES[severity] if 0 <= severity < len(SEVERITY_NAMES) else str(severity)
+
+
+def closest(name: str, known: Sequence[str]) -> str | None:
+    """The known name ``name`` most likely misspells: one that differs only in case, else the
+    closest by difflib's ratio, at least 0.6; None when none is that close."""
+    folded = [k for k in known if k.lower() == name.lower()]
+    close = folded or difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    return close[0] if close else None
+
+
+def did_you_mean(name: str, known: Sequence[str]) -> str:
+    """`` (did you mean 'x'?)`` after an unknown name, or `` (expected one of: a, b)`` when no
+    known name is close (:func:`closest`)."""
+    close = closest(name, known)
+    if close is not None:
+        return f" (did you mean '{close}'?)"
+    return f" (expected one of: {', '.join(known)})"

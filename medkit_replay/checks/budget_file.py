@@ -8,7 +8,6 @@ and line (exit 2).
 
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -38,6 +37,7 @@ from medkit_replay.checks.budget import (
 )
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
+from medkit_replay.text import did_you_mean
 from medkit_replay.yaml_bounds import (
     compose_config,
     shown_text,
@@ -149,9 +149,8 @@ class _Reader:
             if key in seen:
                 raise self.fail(key_node, f"{where}: duplicate key '{shown_text(key)}'")
             if allowed is not None and key not in allowed:
-                raise self.fail(
-                    key_node, f"{where}: unknown key '{shown_text(key)}'{_suggest(key, allowed)}"
-                )
+                hint = did_you_mean(key, allowed)
+                raise self.fail(key_node, f"{where}: unknown key '{shown_text(key)}'{hint}")
             seen.add(key)
             items.append((key, key_node, value_node))
         return items
@@ -186,14 +185,6 @@ def _kind(node: yaml.Node) -> str:
     text = shown_text(str(node.value), limit=_SHOWN)
     shown = f"'{text}'" if node.tag == _STR else text  # as written
     return f"{names.get(node.tag, 'a value')} ({shown})"
-
-
-def _suggest(key: str, allowed: Sequence[str]) -> str:
-    folded = [a for a in allowed if a.lower() == key.lower()]
-    close = folded or difflib.get_close_matches(key, allowed, n=1, cutoff=0.6)
-    if close:
-        return f" (did you mean '{close[0]}'?)"
-    return f" (expected one of: {', '.join(allowed)})"
 
 
 def _max_confirmed(reader: _Reader, node: yaml.Node, where: str) -> MaxConfirmed:
