@@ -13,7 +13,8 @@ from yaml.constructor import ConstructorError, SafeConstructor
 
 from medkit_replay.config.nodes import located, values
 from medkit_replay.config.reader import ParameterReader
-from medkit_replay.errors import ConfigError
+from medkit_replay.config.unknown_keys import unknown_keys
+from medkit_replay.errors import ConfigError, ConfigWarning
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 from medkit_replay.files import read_limited_text
 from medkit_replay.releases import default_release
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
 
 _P = "snapshots."
 _R = "snapshots.rosbag."
+_FILE_KEYS = ("fault_specific", "patterns", "default_topics")
 
 
 def snapshot_config(
@@ -69,7 +71,7 @@ def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[s
     file_name = reader.string(_P + "config_file", "")
     if file_name and file_param is not None:
         path = file_param.path.parent / file_name
-        loaded = _load_file(path, reader)
+        loaded = load_snapshot_file(path, reader)
         if loaded is not None:
             fault_specific, patterns, file_defaults = loaded
             if file_defaults and not defaults:
@@ -151,20 +153,31 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
 Loaded = tuple[dict[str, tuple[str, ...]], dict[str, tuple[str, ...]], tuple[str, ...]]
 
 
-def _load_file(path: Path, reader: ParameterReader) -> Loaded | None:
-    """fault_specific, patterns and default_topics of a snapshot config file.
+def load_snapshot_file(path: Path, reader: ParameterReader) -> Loaded | None:
+    """fault_specific, patterns and default_topics of a snapshot config file; its warnings go
+    to ``reader``.
 
     Upstream logs and carries on without the file when it is missing or not YAML; so does this,
-    with a warning. A file of the wrong shape is refused, naming it.
+    with a warning. A file of the wrong shape is refused, naming it. Another key is warned, with
+    the closest known one.
     """
     try:
         text = read_limited_text(path)
     except (OSError, UnicodeDecodeError) as err:
-        reader.warn(f"snapshot config file {path} cannot be read ({err}); ignored as upstream does")
+        reader.warnings.append(
+            ConfigWarning(
+                f"{reader.node}: snapshot config file {path} cannot be read ({err}); ignored as "
+                "upstream does",
+                path=str(path),
+                unusable=True,
+                shown_at=False,
+            )
+        )
         return None
     root = compose_config(text, str(path))
     if root is None:
         return {}, {}, ()
+    reader.warnings += unknown_keys(root, _FILE_KEYS, str(path), "snapshot config file")
     try:
         data = SafeConstructor().construct_document(root)
     except ConstructorError as err:
