@@ -18,8 +18,8 @@ from medkit_replay.yaml_bounds import compose_config
 if TYPE_CHECKING:
     from pathlib import Path
 
-_PUBLISHED = ("publishers", "publishes", "published", "pub")
-_SUBSCRIBED = ("subscribers", "subscribes", "subscribed", "sub")
+PUBLISHED_KEYS = ("publishers", "publishes", "published", "pub")
+SUBSCRIBED_KEYS = ("subscribers", "subscribes", "subscribed", "sub")
 _INFO_SECTIONS = {"Publishers:": "pub", "Subscribers:": "sub"}
 
 
@@ -49,10 +49,15 @@ def load_graph(path: Path) -> NodeGraph:
         text = read_limited_text(path)
     except (OSError, UnicodeDecodeError) as err:
         raise ConfigError(f"cannot read the node graph: {err}", path=str(path)) from None
-    first = next((line for line in text.splitlines() if line.strip()), "")
-    if first.startswith("/") and not first.rstrip().endswith(":"):
+    if is_node_info(text):
         return _from_node_info(text, str(path))
     return _from_yaml(text, str(path))
+
+
+def is_node_info(text: str) -> bool:
+    """Whether a graph file is ``ros2 node info`` text: its first line a node name, no colon."""
+    first = next((line for line in text.splitlines() if line.strip()), "")
+    return first.startswith("/") and not first.rstrip().endswith(":")
 
 
 def _from_node_info(text: str, path: str) -> NodeGraph:
@@ -119,12 +124,14 @@ def _from_yaml(text: str, path: str) -> NodeGraph:
             name = "/" + name
         if not isinstance(entry, dict):
             raise ConfigError(f"node {name!r}: expected publishers/subscribers", path=path)
-        unknown = [k for k in entry if k not in _PUBLISHED + _SUBSCRIBED]
+        unknown = [k for k in entry if k not in PUBLISHED_KEYS + SUBSCRIBED_KEYS]
         if unknown:
             raise ConfigError(f"node {name!r}: unknown key {unknown[0]!r}", path=path)
-        pubs[name] = set().union(*(_topics(entry[k], path, name) for k in _PUBLISHED if k in entry))
+        pubs[name] = set().union(
+            *(_topics(entry[k], path, name) for k in PUBLISHED_KEYS if k in entry)
+        )
         subs[name] = set().union(
-            *(_topics(entry[k], path, name) for k in _SUBSCRIBED if k in entry)
+            *(_topics(entry[k], path, name) for k in SUBSCRIBED_KEYS if k in entry)
         )
     return _graph(pubs, subs)
 
