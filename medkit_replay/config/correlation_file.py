@@ -228,9 +228,21 @@ def _unknown_keys(root: Node | None, path: str) -> list[ConfigWarning]:
             hierarchical = _mode(item) == "hierarchical"
         except InvalidArgumentError:
             continue  # the rule is refused whole
-        mode = "hierarchical" if hierarchical else "auto_cluster"
-        own = _HIERARCHICAL_KEYS if hierarchical else _CLUSTER_KEYS
-        found += unknown_keys(item, _RULE_KEYS + own, path, f"{rule} ({mode})")
+        modes = ("hierarchical", "auto_cluster")
+        mode, other = modes if hierarchical else modes[::-1]
+        others = _CLUSTER_KEYS if hierarchical else _HIERARCHICAL_KEYS
+        for key, _ in map_items(item):
+            if is_scalar(key) and key.value in others:
+                found.append(
+                    ConfigWarning(
+                        f"{rule} ({mode}): '{key.value}' is read only by "
+                        f"{other} rules; upstream ignores it here",
+                        path=path,
+                        line=line_of(key),
+                    )
+                )
+        keys = _RULE_KEYS + _HIERARCHICAL_KEYS + _CLUSTER_KEYS
+        found += unknown_keys(item, keys, path, f"{rule} ({mode})")
         if hierarchical:
             found += unknown_keys(_map_at(item, "root_cause"), ("codes",), path, rule)
         refs = _map_at(item, "symptoms" if hierarchical else "match", sequence=True)
