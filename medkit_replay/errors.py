@@ -61,7 +61,8 @@ class ConfigWarning(str):
     ``medkit-replay validate`` reads the fields instead of the text. ``path`` and ``line`` locate
     it (also when the text does not: ``shown_at=False`` keeps a text that never named them);
     ``suggestion`` is the name meant, for an unknown key; ``unusable`` says that the reader gave
-    up on the file (upstream carries on without it).
+    up on the file (upstream carries on without it); ``parameter`` names the ROS parameter it is
+    about, so that the config layer, which knows where each value was written, can locate it.
     """
 
     message: str
@@ -69,6 +70,8 @@ class ConfigWarning(str):
     line: int | None
     suggestion: str | None
     unusable: bool
+    shown_at: bool
+    parameter: str | None
 
     def __new__(
         cls,
@@ -79,6 +82,7 @@ class ConfigWarning(str):
         suggestion: str | None = None,
         unusable: bool = False,
         shown_at: bool = True,
+        parameter: str | None = None,
     ) -> ConfigWarning:
         made = super().__new__(cls, at(path, line, message) if shown_at else message)
         made.message = message
@@ -86,6 +90,8 @@ class ConfigWarning(str):
         made.line = line
         made.suggestion = suggestion
         made.unusable = unusable
+        made.shown_at = shown_at
+        made.parameter = parameter
         return made
 
 
