@@ -69,11 +69,9 @@ def validate(
       medkit-replay validate rules/nav2/*.yaml rules/budgets/*.yaml
       medkit-replay validate robot_params.yaml --release 0.6.0 --json
     """
-    from medkit_replay.config.validation import file_findings  # noqa: PLC0415
+    from medkit_replay.config.validation import validate_files  # noqa: PLC0415
 
-    findings: dict[Finding, None] = {}  # once each: a file named by a config may be given too
-    for path in files:
-        findings.update(dict.fromkeys(file_findings(path, release, _budget_findings)))
+    findings = validate_files(files, release, _budget_findings)
     with standard_output("the findings"):
         if as_json:
             records = ",\n".join(

@@ -173,19 +173,41 @@ NO_KIND = (
 )
 
 
-def file_findings(
-    path: Path, release: Release | None, budget: Callable[[Path], list[Finding]]
+def validate_files(
+    paths: Iterable[Path], release: Release | None, budget: Callable[[Path], list[Finding]]
 ) -> list[Finding]:
-    """What the readers of ``path``'s kind say of it, first which kind it was taken for
-    (``budget`` reads a budget). A map of no known kind is read as a parameter file, whose
-    reader says what is wrong with it."""
+    """The findings of every file, each once; a file a given parameter file names is read as
+    the kind it is named for (a typo can hide what its content is)."""
+    found = {path: file_findings(path, release, budget) for path in paths}
+    named = {
+        Path(f.file).resolve(): f.kind
+        for path, findings in found.items()
+        for f in findings
+        if f.severity == "info" and f.file != str(path)
+    }
+    for path, findings in found.items():
+        kind = named.get(path.resolve())
+        if kind is not None and findings[0].kind != kind:
+            found[path] = file_findings(path, release, budget, kind)
+    return list(dict.fromkeys(f for findings in found.values() for f in findings))
+
+
+def file_findings(
+    path: Path,
+    release: Release | None,
+    budget: Callable[[Path], list[Finding]],
+    kind: Kind | None = None,
+) -> list[Finding]:
+    """What the readers of ``path``'s kind (told from its content when None) say of it, first
+    which kind it was taken for; ``budget`` reads a budget. A map of no known kind is read as a
+    parameter file, whose reader says what is wrong with it."""
     try:
         text = read_limited_text(path)
     except FileNotFoundError:
         return [Finding(str(path), None, "error", None, "file not found")]
     except (OSError, UnicodeDecodeError) as err:
         return [Finding(str(path), None, "error", None, f"cannot be read: {err}")]
-    kind = guess_text_kind(text, str(path))
+    kind = kind or guess_text_kind(text, str(path))
     if kind is None:
         try:
             root = compose_config(text, str(path))
