@@ -188,8 +188,12 @@ def validate_files(
     for path, findings in found.items():
         kind = named.get(path.resolve())
         if kind is not None and findings[0].kind != kind:
-            found[path] = file_findings(path, release, budget, kind)
-    return list(dict.fromkeys(f for findings in found.values() for f in findings))
+            findings = file_findings(path, release, budget, kind)
+        if kind is not None:  # its kind is said where it is named
+            found[path] = findings[1:]
+    # A named file's findings after those of the file naming it, which has them too (once).
+    order = sorted(found, key=lambda path: path.resolve() in named)
+    return list(dict.fromkeys(f for path in order for f in found[path]))
 
 
 def file_findings(

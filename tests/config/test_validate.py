@@ -262,7 +262,7 @@ def test_a_file_given_and_named_has_its_findings_once(
     status, out, records = run(capsys, params, correlation)
     assert status == 1
     assert out.count("unknown key 'rulez'") == 1
-    assert out.count("read as a correlation file") == 2  # named, and given
+    assert out.count("read as a correlation file") == 1  # where it is named
     assert len(problems(records)) == 2  # and: the pattern no rule uses
 
 
@@ -275,7 +275,8 @@ def test_a_file_named_by_a_config_given_is_read_as_that_kind(
     status, out, records = run(capsys, snapshots, params)
     assert status == 1, out
     assert problems(records) == [("s.yaml", 1, "warning", "snapshots", "default_topics")]
-    assert out.startswith(f"{snapshots}: info: read as a snapshot config file\n")
+    assert out.startswith(f"{params}: info: read as a ROS 2 parameter file (release 0.7.0)\n")
+    assert f"{snapshots}: info: read as a snapshot config file (named by {params}:4)\n" in out
 
 
 def test_a_plain_warning_is_about_the_file_read() -> None:
