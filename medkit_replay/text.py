@@ -71,18 +71,9 @@ def severity_name(severity: int) -> str:
     return SEVERITY_NAMES[severity] if 0 <= severity < len(SEVERITY_NAMES) else str(severity)
 
 
-def closest(name: str, known: Sequence[str]) -> str | None:
-    """The known name ``name`` most likely misspells: one that differs only in case, else the
-    closest by difflib's ratio, at least 0.6; None when none is that close."""
+def closest(name: str, known: Sequence[str], cutoff: float = 0.6) -> str | None:
+    """The known name ``name`` most likely misspells: one differing only in case, else the
+    nearest by difflib's ratio when at least ``cutoff``; None when none is near."""
     folded = [k for k in known if k.lower() == name.lower()]
-    close = folded or difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    close = folded or difflib.get_close_matches(name, known, n=1, cutoff=cutoff)
     return close[0] if close else None
-
-
-def did_you_mean(name: str, known: Sequence[str]) -> str:
-    """`` (did you mean 'x'?)`` after an unknown name, or `` (expected one of: a, b)`` when no
-    known name is close (:func:`closest`)."""
-    close = closest(name, known)
-    if close is not None:
-        return f" (did you mean '{close}'?)"
-    return f" (expected one of: {', '.join(known)})"

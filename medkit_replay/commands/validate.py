@@ -90,11 +90,6 @@ def validate(
 def _budget_findings(path: Path) -> list[Finding]:
     """A budget read as check reads it (the checks layer, which config does not import)."""
     from medkit_replay.checks.budget_file import load_budget  # noqa: PLC0415
-    from medkit_replay.config.validation import error_finding, said_kind  # noqa: PLC0415
-    from medkit_replay.errors import ConfigError  # noqa: PLC0415
+    from medkit_replay.config.validation import strict_findings  # noqa: PLC0415
 
-    try:
-        load_budget(path)
-    except ConfigError as err:
-        return [said_kind(path, "budget"), error_finding(err, path, "budget")]
-    return [said_kind(path, "budget")]
+    return strict_findings(path, "budget", load_budget)

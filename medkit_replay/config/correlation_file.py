@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from medkit_replay.config.unknown_keys import unknown_keys
+from medkit_replay.config.file_keys import unknown_map_keys
 from medkit_replay.config.yamlcpp import (
     MAX_FILE_BYTES,
     YamlCppError,
@@ -212,13 +212,13 @@ def _parse_root(root: Node | None) -> CorrelationConfig:
 def _unknown_keys(root: Node | None, path: str) -> list[ConfigWarning]:
     """Keys upstream's parser does not read; a rule's keys of the other mode count as unknown
     there (upstream ignores them too). Only maps are looked into: this never throws."""
-    found = unknown_keys(root, _TOP_KEYS, path, "correlation file")
+    found = unknown_map_keys(root, _TOP_KEYS, path, "correlation file")
     correlation = _map_at(root, "correlation")
-    found += unknown_keys(correlation, _CORRELATION_KEYS, path, "correlation")
+    found += unknown_map_keys(correlation, _CORRELATION_KEYS, path, "correlation")
     patterns = _map_at(correlation, "patterns")
     for key, value in map_items(patterns) if patterns is not None else []:
         name = f"pattern '{shown_text(str(key.value))}'"
-        found += unknown_keys(value, ("codes",), path, name)
+        found += unknown_map_keys(value, ("codes",), path, name)
     rules = _map_at(correlation, "rules", sequence=True)
     for item in sequence_items(rules) if rules is not None else []:
         if not is_map(item):
@@ -242,12 +242,12 @@ def _unknown_keys(root: Node | None, path: str) -> list[ConfigWarning]:
                     )
                 )
         keys = _RULE_KEYS + _HIERARCHICAL_KEYS + _CLUSTER_KEYS
-        found += unknown_keys(item, keys, path, f"{rule} ({mode})")
+        found += unknown_map_keys(item, keys, path, f"{rule} ({mode})")
         if hierarchical:
-            found += unknown_keys(_map_at(item, "root_cause"), ("codes",), path, rule)
+            found += unknown_map_keys(_map_at(item, "root_cause"), ("codes",), path, rule)
         refs = _map_at(item, "symptoms" if hierarchical else "match", sequence=True)
         for ref in sequence_items(refs) if refs is not None else []:
-            found += unknown_keys(ref, ("pattern", "codes"), path, rule)
+            found += unknown_map_keys(ref, ("pattern", "codes"), path, rule)
     return found
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.config.unknown_keys import unknown_keys
+from medkit_replay.config.file_keys import unknown_map_keys
 from medkit_replay.config.yamlcpp import (
     MAX_FILE_BYTES,
     YamlCppError,
@@ -41,7 +41,7 @@ def _wrap_int32(value: int) -> int:
 
 
 def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOverride:
-    warnings += unknown_keys(node, _FIELDS, where, f"entity '{shown_text(prefix)}'")
+    warnings += unknown_map_keys(node, _FIELDS, where, f"entity '{shown_text(prefix)}'")
     confirmation: int | None = None
     healing_enabled: bool | None = None
     healing: int | None = None

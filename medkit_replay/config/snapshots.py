@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING
 
 from yaml.constructor import ConstructorError, SafeConstructor
 
+from medkit_replay.config.file_keys import unknown_map_keys
 from medkit_replay.config.nodes import located, located_warnings, values
 from medkit_replay.config.reader import ParameterReader
-from medkit_replay.config.unknown_keys import unknown_keys
 from medkit_replay.errors import ConfigError, ConfigWarning
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 from medkit_replay.files import read_limited_text
@@ -208,7 +208,7 @@ def load_snapshot_file(path: Path, reader: ParameterReader) -> Loaded | None:
     root = compose_config(text, str(path))
     if root is None:
         return {}, {}, ()
-    reader.warnings += unknown_keys(root, _FILE_KEYS, str(path), "snapshot config file")
+    reader.warnings += unknown_map_keys(root, _FILE_KEYS, str(path), "snapshot config file")
     try:
         data = SafeConstructor().construct_document(root)
     except ConstructorError as err:

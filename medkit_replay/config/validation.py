@@ -150,13 +150,18 @@ def snapshot_findings(path: Path) -> list[Finding]:
     return found + warning_findings(reader.warnings, path, "snapshots")
 
 
+def strict_findings(path: Path, kind: Kind, read: Callable[[Path], object]) -> list[Finding]:
+    """A file of a kind whose reader only refuses (a budget, a graph): its error, if any."""
+    try:
+        read(path)
+    except ConfigError as err:
+        return [said_kind(path, kind), error_finding(err, path, kind)]
+    return [said_kind(path, kind)]
+
+
 def graph_findings(path: Path) -> list[Finding]:
     """A ``--graph`` file read as analyze and explain read it."""
-    try:
-        load_graph(path)
-    except ConfigError as err:
-        return [said_kind(path, "graph"), error_finding(err, path, "graph")]
-    return [said_kind(path, "graph")]
+    return strict_findings(path, "graph", load_graph)
 
 
 READERS: dict[Kind, Callable[[Path], list[Finding]]] = {

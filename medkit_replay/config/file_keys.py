@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from yaml.nodes import MappingNode, ScalarNode
 
 from medkit_replay.errors import ConfigWarning
-from medkit_replay.text import closest, did_you_mean
+from medkit_replay.text import closest
 from medkit_replay.yaml_bounds import shown_text
 
 if TYPE_CHECKING:
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from yaml.nodes import Node
 
 
-def unknown_keys(
+def unknown_map_keys(
     node: Node | None, known: Sequence[str], path: str, where: str
 ) -> list[ConfigWarning]:
     """A warning for each key of the map ``node`` not in ``known`` (none when ``node`` is not a
@@ -33,13 +33,14 @@ def unknown_keys(
             continue
         key = str(key_node.value)
         line = None if key_node.start_mark is None else key_node.start_mark.line + 1
+        meant = closest(key, known)
+        hint = f"did you mean '{meant}'?" if meant else f"expected one of: {', '.join(known)}"
         found.append(
             ConfigWarning(
-                f"{where}: unknown key '{shown_text(key)}'{did_you_mean(key, known)}; "
-                "upstream ignores it",
+                f"{where}: unknown key '{shown_text(key)}' ({hint}); upstream ignores it",
                 path=path,
                 line=line,
-                suggestion=closest(key, known),
+                suggestion=meant,
             )
         )
     return found
