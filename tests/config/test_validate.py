@@ -304,3 +304,24 @@ def test_a_replay_warns_unknown_keys_of_the_files_a_config_names(
         f"{tmp_path / 'entity.yaml'}:2: entity '/controller_server': unknown key "
         "'healing_treshold' (did you mean 'healing_threshold'?); upstream ignores it"
     ]
+
+
+def test_keys_of_a_disabled_correlation_file_are_warned_whatever_it_holds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Upstream reads nothing past ``enabled: false``: rules it would refuse refuse nothing."""
+    path = write(
+        tmp_path,
+        "correlation.yaml",
+        "correlation:\n  enabled: false\n  rules:\n    - hello\n    - {mode: bogus, x: 1}\n"
+        "    - {id: a, mode: cluster, typo: 2}\n  patterns: {p: [A], q: {codez: [B]}}\n",
+    )
+    status, out, records = run(capsys, path)
+    assert status == 1, out
+    assert problems(records) == [
+        ("correlation.yaml", 7, "warning", "correlation", "codes"),
+        ("correlation.yaml", 6, "warning", "correlation", None),
+        ("correlation.yaml", None, "warning", "correlation", None),
+    ]
+    assert "rule 'a' (auto_cluster): unknown key 'typo'" in out
+    assert f"{path}: warning: Correlation explicitly disabled in config" in out
