@@ -230,26 +230,27 @@ def test_a_file_named_by_a_config_that_is_missing_is_unusable(
     assert f"{tmp_path / 'gone.yaml'}: error: Correlation config file not found" in out
 
 
-NEAR_MISS = "fault_manager:\n  ros__parameters:\n    near_miss.max_per_fault: -1\n"
+ZERO = "fault_manager:\n  ros__parameters:\n    confirmation_threshold: 0\n"
+OLD = "medkit_replay:\n  ros__parameters:\n    upstream_release: '0.6.0'\n"
 
 
 def test_release_checks_against_another_release(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """0.6.0 declares no near_miss.max_per_fault: its value is not read there."""
-    newest = write(tmp_path, "params.yaml", NEAR_MISS)
+    """0.7.0 replaces a confirmation_threshold of 0 with -1; 0.6.0 keeps it, saying nothing."""
+    newest = write(tmp_path, "params.yaml", ZERO)
     status, out, _ = run(capsys, newest)
-    assert status == 1 and "near_miss.max_per_fault -1 is negative" in out
+    assert status == 1
+    assert f"{newest}:3: warning: fault_manager: confirmation_threshold 0 is invalid" in out
     status, out, _ = run(capsys, newest, "--release", "0.6.0")
     assert (status, out) == (0, f"{newest}: info: read as a ROS 2 parameter file (release 0.6.0)\n")
-    own = write(
-        tmp_path,
-        "old.yaml",
-        NEAR_MISS + "medkit_replay:\n  ros__parameters:\n    upstream_release: '0.6.0'\n",
+    own = write(tmp_path, "old.yaml", ZERO + OLD)
+    assert run(capsys, own)[:2] == (
+        0,
+        f"{own}: info: read as a ROS 2 parameter file (release 0.6.0)\n",
     )
-    assert run(capsys, own)[0] == 0
     status, out, _ = run(capsys, own, "--release", "0.7.0")
-    assert status == 1 and "(release 0.7.0)" in out
+    assert status == 1 and "(release 0.7.0)" in out and "is invalid; using -1" in out
     assert main(["validate", str(own), "--release", "9.9"]) == 2
     assert "not a release the replay models" in capsys.readouterr().err
 
