@@ -112,6 +112,16 @@ def test_every_file_under_rules_validates_clean(capsys: pytest.CaptureFixture[st
     assert said == {f.resolve() for f in files}  # each given file, and those they name
 
 
+def test_the_example_configs_validate_clean(capsys: pytest.CaptureFixture[str]) -> None:
+    files = [
+        *sorted((ROOT / "examples").rglob("*.yaml")),
+        ROOT / "examples/evidence/nav2_graph.txt",
+    ]
+    status, out, records = run(capsys, *files)
+    assert status == 0, out
+    assert [r["kind"] for r in records] == ["parameters", "parameters", "graph"]
+
+
 def test_a_parameter_file_is_read_with_the_files_it_names(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
