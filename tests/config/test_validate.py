@@ -180,6 +180,18 @@ def test_a_parameter_file_is_read_with_the_files_it_names(
             "fault_manager: confirmation_threshold 3 is positive; using -3 (upstream negates it)",
             3,
         ),
+        (
+            "params.yaml",
+            "log_bridge:\n  ros__parameters:\n    severity_floor: 99\n",
+            "log_bridge: severity_floor=99 out of range [0,50], clamping",
+            3,
+        ),
+        (
+            "params.yaml",
+            PARAMS + "    snapshots: {timeout_sec: -1.0}\n",
+            "fault_manager: snapshots.timeout_sec -1.0 must be positive; using 1.0",
+            4,
+        ),
     ],
 )
 def test_a_warning_exits_1_with_file_line_and_suggestion(
