@@ -222,6 +222,8 @@ def file_findings(
             root = compose_config(text, str(path))
         except ConfigError as err:
             return [error_finding(err, path, None)]
+        if root is None:
+            return [Finding(str(path), None, "warning", None, "empty: it sets nothing")]
         if not isinstance(root, MappingNode):
             return [Finding(str(path), None, "error", None, NO_KIND)]
         kind = "parameters"

@@ -348,3 +348,8 @@ def test_keys_of_a_disabled_correlation_file_are_warned_whatever_it_holds(
     ]
     assert "rule 'a' (auto_cluster): unknown key 'typo'" in out
     assert f"{path}: warning: Correlation explicitly disabled in config" in out
+
+
+def test_an_empty_file_is_a_warning(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "empty.yaml", "# nothing yet\n")
+    assert run(capsys, path)[:2] == (1, f"{path}: warning: empty: it sets nothing\n")
