@@ -35,6 +35,13 @@ if TYPE_CHECKING:
 
 Severity = Literal["error", "warning", "info"]
 
+NAMED_KINDS: dict[str, Kind] = {
+    "correlation.config_file": "correlation",
+    "entity_thresholds.config_file": "entity_thresholds",
+    "snapshots.config_file": "snapshots",
+}
+"""The kind of file each of fault_manager's file parameters (FILE_PARAMETERS) names."""
+
 
 @dataclass(frozen=True, slots=True)
 class Finding:
@@ -107,7 +114,7 @@ def parameter_findings(path: Path, release: Release | None = None) -> list[Findi
     for name in FILE_PARAMETERS:  # the files it names, beside it
         param = named.get(name)
         if param is not None and isinstance(param.value, str) and param.value:
-            kind: Kind = name.split(".", 1)[0]  # type: ignore[assignment]  # one per parameter
+            kind = NAMED_KINDS[name]
             referenced = str(param.path.parent / param.value)
             kinds[referenced] = kind
             found.append(said_kind(Path(referenced), kind, f" (named by {path}:{param.line})"))
