@@ -23,6 +23,7 @@ from medkit_replay.commands.follow import follow
 from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.commands.suggest_rules import suggest_rules
 from medkit_replay.commands.sweep import sweep
+from medkit_replay.commands.validate import validate
 from medkit_replay.errors import MedkitReplayError, Terminated
 from medkit_replay.outputs.console import echo
 from medkit_replay.version import __version__
@@ -114,6 +115,7 @@ cli.add_command(fleet)
 cli.add_command(follow)
 cli.add_command(sweep)
 cli.add_command(suggest_rules)
+cli.add_command(validate)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,5 @@
-"""Errors medkit-replay raises; each knows the exit status the CLI turns it into.
-
-The library raises these; only the CLI prints them.
+"""Errors medkit-replay raises, each knowing the exit status the CLI turns it into, and the
+located warnings config readers give. The library raises and returns these; the CLI prints them.
 """
 
 from __future__ import annotations
@@ -22,10 +21,14 @@ class MedkitReplayError(Exception):
 
     def render(self) -> str:
         """``path:line: problem`` with whatever location is known."""
-        where = ""
-        if self.path is not None:
-            where = f"{self.path}:{self.line}: " if self.line is not None else f"{self.path}: "
-        return f"{where}{self.problem}"
+        return at(self.path, self.line, self.problem)
+
+
+def at(path: str | None, line: int | None, text: str) -> str:
+    """``path:line: text``, ``path: text`` or ``text``, as much as is known."""
+    if path is None:
+        return text
+    return f"{path}:{line}: {text}" if line is not None else f"{path}: {text}"
 
 
 class InputError(MedkitReplayError):
@@ -49,6 +52,47 @@ class ConfigError(MedkitReplayError):
     ) -> None:
         self.parameter = parameter
         super().__init__(problem, path=path, line=line)
+
+
+class ConfigWarning(str):
+    """A config reader's warning: the text every output shows, and what it is about.
+
+    A ``str``, so that lists of warnings, reports and their bytes stay as they are;
+    ``medkit-replay validate`` reads the fields instead of the text. ``path`` and ``line`` locate
+    it (also when the text does not: ``shown_at=False`` keeps a text that never named them);
+    ``suggestion`` is the name meant, for an unknown key; ``unusable`` says that the reader gave
+    up on the file (upstream carries on without it); ``parameter`` names the ROS parameter it is
+    about, so that the config layer, which knows where each value was written, can locate it.
+    """
+
+    message: str
+    path: str | None
+    line: int | None
+    suggestion: str | None
+    unusable: bool
+    shown_at: bool
+    parameter: str | None
+
+    def __new__(
+        cls,
+        message: str,
+        *,
+        path: str | None = None,
+        line: int | None = None,
+        suggestion: str | None = None,
+        unusable: bool = False,
+        shown_at: bool = True,
+        parameter: str | None = None,
+    ) -> ConfigWarning:
+        made = super().__new__(cls, at(path, line, message) if shown_at else message)
+        made.message = message
+        made.path = path
+        made.line = line
+        made.suggestion = suggestion
+        made.unusable = unusable
+        made.shown_at = shown_at
+        made.parameter = parameter
+        return made
 
 
 class Terminated(BaseException):  # like KeyboardInterrupt: not an Exception

@@ -16,8 +16,8 @@ from tests.checks.support import BUDGETS, NAV2
 ROOT = Path(__file__).resolve().parents[1]
 GATES = {"check", "fleet", "sweep"}
 """Where a recording that cannot be read is a failed check (1), never a pass."""
-FAILED_CHECKS = GATES | {"diff"}
-"""The commands that exit 1 at all (diff: the reports differ)."""
+FAILED_CHECKS = GATES | {"diff", "validate"}
+"""The commands that exit 1 at all (diff: the reports differ; validate: warnings)."""
 UNREADABLE = re.compile(r"cannot be read|unreadable")
 
 
@@ -71,6 +71,7 @@ def test_every_command_is_checked() -> None:
         "follow",
         "suggest-rules",
         "sweep",
+        "validate",
     }
 
 
@@ -80,6 +81,7 @@ def test_one_table_in_the_docs() -> None:
     rows = [line for line in section.splitlines() if re.match(r"\| `[012]` \|", line)]
     assert [row[3] for row in rows] == ["0", "1", "2"]
     assert "`check`, `fleet --budget`, `sweep --budget` and the pytest plugin" in section
+    assert "warnings in the files checked (`validate`" in rows[1]
     budgets = (ROOT / "docs" / "budgets.md").read_text(encoding="utf-8")
     assert "(../README.md#exit-statuses)" in budgets
     assert not re.search(r"^\| `[012]` \|", budgets, re.MULTILINE)  # linked, not repeated

@@ -132,6 +132,7 @@ HEAVY_AT_START = (
         ["follow", "--help"],
         ["sweep", "--help"],
         ["suggest-rules", "--help"],
+        ["validate", "--help"],
     ],
 )
 def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:

@@ -56,7 +56,10 @@ def diagnostic_bridge_config(
         requested = read.integer("max_tracked_sources", 512)
         tracked = min(max(requested, 1), INT32_MAX)
         if tracked != requested:
-            read.warn(f"max_tracked_sources={requested} clamped to {tracked}")
+            read.warn(
+                f"max_tracked_sources={requested} clamped to {tracked}",
+                parameter="max_tracked_sources",
+            )
     keys: tuple[str, ...] = ()
     if release.diagnostic_keyvalue_codes:
         keys = tuple(key for key in read.strings("keyvalue_codes") if key)
@@ -87,30 +90,38 @@ def action_status_bridge_config(
     read = ParameterReader(ACTION_NODE, params)
     severity = _integer(read, release, "aborted_severity", 2)
     if not 0 <= severity <= 3:
-        read.warn(f"aborted_severity {severity} out of range [0,3]; clamping to ERROR")
+        read.warn(
+            f"aborted_severity {severity} out of range [0,3]; clamping to ERROR",
+            parameter="aborted_severity",
+        )
         severity = 2
     canceled_is_fault = read.boolean("canceled_is_fault", False)
     heal_on_succeeded = read.boolean("heal_on_succeeded", True)
     rescan = read.double("rescan_period_sec", 2.0)
     if rescan <= 0.0:
-        read.warn(f"rescan_period_sec {rescan:.3f} not positive; using 2.0")
+        read.warn(
+            f"rescan_period_sec {rescan:.3f} not positive; using 2.0", parameter="rescan_period_sec"
+        )
         rescan = 2.0
     retry = 0.05  # without the retry timer (0.6.0) the default stands, for the record
     if release.action_bridge_defers_delivery:
         retry = read.double("retry_period_sec", 0.05)
         if retry <= 0.0:
-            read.warn(f"retry_period_sec {retry:.3f} not positive; using 0.05")
+            read.warn(
+                f"retry_period_sec {retry:.3f} not positive; using 0.05",
+                parameter="retry_period_sec",
+            )
             retry = 0.05
     prefix = action_code_prefix(read.string("code_prefix", "ACTION"))
     if not prefix:
-        read.warn("code_prefix empty after normalization; using ACTION")
+        read.warn("code_prefix empty after normalization; using ACTION", parameter="code_prefix")
         prefix = "ACTION"
     exclude = read.strings("exclude_actions")
     include_only = read.strings("include_only_actions")
     capacity = _integer(read, release, "dedup_capacity", 4096)
     if not 0 < capacity <= INT32_MAX:  # a narrowed value can only fail by not being positive
         wrong = "out of range" if release.bridge_ints_read_as_int64 else "not positive"
-        read.warn(f"dedup_capacity {capacity} {wrong}; using 4096")
+        read.warn(f"dedup_capacity {capacity} {wrong}; using 4096", parameter="dedup_capacity")
         capacity = 4096
     config = ActionStatusBridgeConfig(
         aborted_severity=severity,
@@ -144,7 +155,10 @@ def log_bridge_config(
     topic = read.string("rosout_topic", "/rosout")
     floor = _integer(read, release, "severity_floor", LEVEL_WARN)
     if not 0 <= floor <= LEVEL_FATAL:
-        read.warn(f"severity_floor={floor} out of range [0,{LEVEL_FATAL}], clamping")
+        read.warn(
+            f"severity_floor={floor} out of range [0,{LEVEL_FATAL}], clamping",
+            parameter="severity_floor",
+        )
         floor = min(max(floor, 0), LEVEL_FATAL)
     prefix = log_code_prefix(read.string("code_prefix", "LOG"))
     exclude = read.strings("exclude_nodes")
@@ -152,13 +166,16 @@ def log_bridge_config(
     requested = _integer(read, release, "max_tracked_nodes", 512)
     tracked = min(max(requested, 1), INT32_MAX)
     if tracked != requested and release.log_bridge_checks_coercions:
-        read.warn(f"max_tracked_nodes {requested} clamped to {tracked}")
+        read.warn(
+            f"max_tracked_nodes {requested} clamped to {tracked}", parameter="max_tracked_nodes"
+        )
     cooldown = read.double("report_cooldown_sec", DEFAULT_COOLDOWN_SEC)
     if release.log_bridge_checks_coercions:
         if not math.isfinite(cooldown * NS_PER_SEC) or cooldown < 0.0:
             read.warn(
                 f"report_cooldown_sec {cooldown:.2f} must be finite and >= 0. "
-                f"Using default {DEFAULT_COOLDOWN_SEC}."
+                f"Using default {DEFAULT_COOLDOWN_SEC}.",
+                parameter="report_cooldown_sec",
             )
             cooldown = DEFAULT_COOLDOWN_SEC
     elif cooldown < 0.0:

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from medkit_replay.config.file_keys import unknown_map_keys
 from medkit_replay.config.yamlcpp import (
     MAX_FILE_BYTES,
     YamlCppError,
@@ -32,6 +33,7 @@ from medkit_replay.engine.correlation.rules import (
     string_to_representative,
     validate_config,
 )
+from medkit_replay.errors import ConfigWarning
 from medkit_replay.files import read_limited
 from medkit_replay.yaml_bounds import shown_text
 
@@ -41,6 +43,13 @@ if TYPE_CHECKING:
     from medkit_replay.config.yamlcpp import Node
 
 _OFF = "correlation is off for this run"
+
+# The keys upstream's parser reads (correlation.md §2); a rule's keys depend on its mode.
+_TOP_KEYS = ("correlation",)
+_CORRELATION_KEYS = ("enabled", "default_window_ms", "patterns", "rules")
+_RULE_KEYS = ("id", "name", "mode", "window_ms")
+_HIERARCHICAL_KEYS = ("root_cause", "symptoms", "mute_symptoms", "auto_clear_with_root")
+_CLUSTER_KEYS = ("match", "min_count", "show_as_single", "representative")
 
 
 class InvalidArgumentError(ValueError):
@@ -177,7 +186,10 @@ def parse_correlation_config(text: str | bytes) -> CorrelationConfig:
     Raises YamlCppError where yaml-cpp throws (syntax, BadSubscript, bad conversion) and
     InvalidArgumentError (a ValueError with upstream's exact text) for a bad mode/representative.
     """
-    root = compose(text)
+    return _parse_root(compose(text))
+
+
+def _parse_root(root: Node | None) -> CorrelationConfig:
     correlation = subscript(root, "correlation")
     if correlation is None:
         return CorrelationConfig(enabled=False)
@@ -197,43 +209,109 @@ def parse_correlation_config(text: str | bytes) -> CorrelationConfig:
     )
 
 
-def _no_engine(where: str, message: str) -> CorrelationLoad:
-    return CorrelationLoad(None, (f"{where}: {message}; {_OFF}",))
+def _unknown_keys(root: Node | None, path: str) -> list[ConfigWarning]:
+    """Keys upstream's parser does not read; a rule's keys of the other mode count as unknown
+    there (upstream ignores them too). Only maps are looked into: this never throws."""
+    found = unknown_map_keys(root, _TOP_KEYS, path, "correlation file")
+    correlation = _map_at(root, "correlation")
+    found += unknown_map_keys(correlation, _CORRELATION_KEYS, path, "correlation")
+    patterns = _map_at(correlation, "patterns")
+    for key, value in map_items(patterns) if patterns is not None else []:
+        name = f"pattern '{shown_text(str(key.value))}'"
+        found += unknown_map_keys(value, ("codes",), path, name)
+    rules = _map_at(correlation, "rules", sequence=True)
+    for item in sequence_items(rules) if rules is not None else []:
+        if not is_map(item):
+            continue
+        rule = f"rule '{shown_text(_get_string(item, 'id'))}'"
+        try:
+            hierarchical = _mode(item) == "hierarchical"
+        except InvalidArgumentError:
+            continue  # the rule is refused whole
+        modes = ("hierarchical", "auto_cluster")
+        mode, other = modes if hierarchical else modes[::-1]
+        others = _CLUSTER_KEYS if hierarchical else _HIERARCHICAL_KEYS
+        for key, _ in map_items(item):
+            if is_scalar(key) and key.value in others:
+                found.append(
+                    ConfigWarning(
+                        f"{rule} ({mode}): '{key.value}' is read only by "
+                        f"{other} rules; upstream ignores it here",
+                        path=path,
+                        line=line_of(key),
+                    )
+                )
+        keys = _RULE_KEYS + _HIERARCHICAL_KEYS + _CLUSTER_KEYS
+        found += unknown_map_keys(item, keys, path, f"{rule} ({mode})")
+        if hierarchical:
+            found += unknown_map_keys(_map_at(item, "root_cause"), ("codes",), path, rule)
+        refs = _map_at(item, "symptoms" if hierarchical else "match", sequence=True)
+        for ref in sequence_items(refs) if refs is not None else []:
+            found += unknown_map_keys(ref, ("pattern", "codes"), path, rule)
+    return found
+
+
+def _map_at(node: Node | None, key: str, *, sequence: bool = False) -> Node | None:
+    """``node[key]`` when ``node`` is a map and the value a map (or a sequence), else None."""
+    if node is None or not is_map(node):
+        return None
+    value = subscript(node, key)
+    wanted = is_sequence if sequence else is_map
+    return value if value is not None and wanted(value) else None
+
+
+def _no_engine(
+    path: Path, message: str, line: int | None = None, *, unusable: bool = True
+) -> tuple[ConfigWarning]:
+    return (ConfigWarning(f"{message}; {_OFF}", path=str(path), line=line, unusable=unusable),)
 
 
 def load_correlation(path: Path) -> CorrelationLoad:
     """The node's create_correlation_engine on a file: parse, validate, never fatal (§1.1).
 
-    Every message is prefixed with the file path (and the line when one is known).
+    Every message is prefixed with the file path (and the line when one is known); a key the
+    parser does not read is warned, with the closest known one.
     """
     try:
         data = read_limited(path, MAX_FILE_BYTES)
     except FileNotFoundError:
-        return _no_engine(f"{path}", "Correlation config file not found")
+        return CorrelationLoad(None, _no_engine(path, "Correlation config file not found"))
     except OSError as exc:  # a FIFO, device or directory too: refused, never read
         what = f"Cannot open correlation config file: {path} ({exc.strerror or exc})"
-        return _no_engine(f"{path}", f"Failed to load correlation config: {what}")
+        return CorrelationLoad(None, _no_engine(path, f"Failed to load correlation config: {what}"))
     try:
-        config = parse_correlation_config(data)
+        root = compose(data)
+        config = _parse_root(root)
     except (YamlCppError, InvalidArgumentError) as exc:
-        where = f"{path}:{exc.line}" if exc.line is not None else f"{path}"
-        return _no_engine(where, f"Failed to load correlation config: {exc}")
+        failed = f"Failed to load correlation config: {exc}"
+        return CorrelationLoad(None, _no_engine(path, failed, exc.line))
+    unknown = _unknown_keys(root, str(path))
     if not config.enabled:
-        return _no_engine(f"{path}", "Correlation explicitly disabled in config")
+        off = _no_engine(path, "Correlation explicitly disabled in config", unusable=False)
+        return CorrelationLoad(None, (*unknown, *off))
     validation = validate_config(config)
-    messages = [
-        f"{path}: Correlation config: {shown_text(warning, limit=400)}"
-        for warning in validation.warnings
+    messages: list[str] = [
+        *unknown,
+        *(
+            ConfigWarning(f"Correlation config: {shown_text(warning, limit=400)}", path=str(path))
+            for warning in validation.warnings
+        ),
     ]
     if not validation.valid:
         messages.extend(
-            f"{path}: Correlation config error: {shown_text(error, limit=400)}"
+            ConfigWarning(
+                f"Correlation config error: {shown_text(error, limit=400)}", path=str(path)
+            )
             for error in validation.errors
         )
         count = len(validation.errors)
         messages.append(
-            f"{path}: CORRELATION IS DISABLED FOR THIS RUN: {count} validation "
-            f"error{'s' if count != 1 else ''} (upstream creates no correlation engine)"
+            ConfigWarning(
+                f"CORRELATION IS DISABLED FOR THIS RUN: {count} validation "
+                f"error{'s' if count != 1 else ''} (upstream creates no correlation engine)",
+                path=str(path),
+                unusable=True,
+            )
         )
         return CorrelationLoad(None, tuple(messages))
     return CorrelationLoad(config, tuple(messages))

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from medkit_replay.config.file_keys import unknown_map_keys
 from medkit_replay.config.yamlcpp import (
     MAX_FILE_BYTES,
     YamlCppError,
@@ -21,6 +22,7 @@ from medkit_replay.config.yamlcpp import (
     subscript,
 )
 from medkit_replay.engine.thresholds import EntityOverride
+from medkit_replay.errors import ConfigWarning
 from medkit_replay.files import read_limited
 from medkit_replay.yaml_bounds import shown_text
 
@@ -30,6 +32,7 @@ if TYPE_CHECKING:
     from medkit_replay.config.yamlcpp import Node
 
 _NONE = "no per-entity overrides for this run"
+_FIELDS = ("confirmation_threshold", "healing_enabled", "healing_threshold")
 
 
 def _wrap_int32(value: int) -> int:
@@ -38,6 +41,7 @@ def _wrap_int32(value: int) -> int:
 
 
 def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOverride:
+    warnings += unknown_map_keys(node, _FIELDS, where, f"entity '{shown_text(prefix)}'")
     confirmation: int | None = None
     healing_enabled: bool | None = None
     healing: int | None = None
@@ -46,9 +50,12 @@ def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOv
         confirmation = as_int32(value)
         if confirmation > 0:
             warnings.append(
-                f"{where}:{line_of(value)}: confirmation_threshold for '{shown_text(prefix)}' "
-                "should be <= 0, "
-                f"got {confirmation}. Using {-confirmation}."
+                ConfigWarning(
+                    f"confirmation_threshold for '{shown_text(prefix)}' should be <= 0, "
+                    f"got {confirmation}. Using {-confirmation}.",
+                    path=where,
+                    line=line_of(value),
+                )
             )
             confirmation = -confirmation
     value = subscript(node, "healing_enabled")
@@ -60,9 +67,12 @@ def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOv
         if healing < 0:
             fixed = _wrap_int32(-healing)
             warnings.append(
-                f"{where}:{line_of(value)}: healing_threshold for '{shown_text(prefix)}' "
-                "should be >= 0, "
-                f"got {healing}. Using {fixed}."
+                ConfigWarning(
+                    f"healing_threshold for '{shown_text(prefix)}' should be >= 0, "
+                    f"got {healing}. Using {fixed}.",
+                    path=where,
+                    line=line_of(value),
+                )
             )
             healing = fixed
     return EntityOverride(
@@ -73,13 +83,19 @@ def _entry(prefix: str, node: Node, where: str, warnings: list[str]) -> EntityOv
     )
 
 
+def _unusable(path: str, message: str, line: int | None = None) -> tuple[ConfigWarning]:
+    """The one warning of a file upstream reads no entry of."""
+    return (ConfigWarning(f"{message}; {_NONE}", path=path, line=line, unusable=True),)
+
+
 def load_entity_thresholds(
     path: Path,
 ) -> tuple[tuple[EntityOverride, ...], tuple[str, ...]]:
     """Entries in file order, and what upstream would have logged (each prefixed with the path).
 
     Missing file, unparsable YAML or a non-map root → no entries. A non-map value skips its
-    prefix. A value that does not convert stops the reading: that entry and every later one
+    prefix; a field it does not know is warned, with the closest known one. A value that
+    does not convert stops the reading: that entry and every later one
     are dropped, the earlier ones kept. Positive confirmation_threshold and negative
     healing_threshold are negated; nothing is sanitised here.
     """
@@ -87,16 +103,15 @@ def load_entity_thresholds(
     try:
         root = compose(read_limited(path, MAX_FILE_BYTES))
     except FileNotFoundError:
-        return (), (f"{where}: Entity thresholds config file not found; {_NONE}",)
+        return (), _unusable(where, "Entity thresholds config file not found")
     except OSError as exc:  # a FIFO, device or directory too: refused, never read
-        return (), (f"{where}: Failed to read entity thresholds config: {exc.strerror}; {_NONE}",)
+        return (), _unusable(where, f"Failed to read entity thresholds config: {exc.strerror}")
     except YamlCppError as exc:
-        at = where if exc.line is None else f"{where}:{exc.line}"
-        return (), (f"{at}: Failed to parse entity thresholds config: {exc}; {_NONE}",)
+        failed = f"Failed to parse entity thresholds config: {exc}"
+        return (), _unusable(where, failed, exc.line)
     if root is None or not is_map(root):
-        return (), (
-            f"{where}: Entity thresholds config must be a YAML map, got {kind_name(root)}; {_NONE}",
-        )
+        got = f"Entity thresholds config must be a YAML map, got {kind_name(root)}"
+        return (), _unusable(where, got)
     entries: list[EntityOverride] = []
     warnings: list[str] = []
     items = map_items(root)
@@ -105,18 +120,24 @@ def load_entity_thresholds(
             prefix = as_string(key)
             if not is_map(value):
                 warnings.append(
-                    f"{where}:{line_of(key)}: Skipping non-map entry for prefix "
-                    f"'{shown_text(prefix)}'"
+                    ConfigWarning(
+                        f"Skipping non-map entry for prefix '{shown_text(prefix)}'",
+                        path=where,
+                        line=line_of(key),
+                    )
                 )
                 continue
             entries.append(_entry(prefix, value, where, warnings))
         except YamlCppError as exc:
             later = len(items) - index - 1
-            at = where if exc.line is None else f"{where}:{exc.line}"
             warnings.append(
-                f"{at}: Failed to parse entity thresholds config: {exc}; upstream stops reading "
-                f"here: this entry and the {later} after it are dropped; the {len(entries)} "
-                "entries read before it apply"
+                ConfigWarning(
+                    f"Failed to parse entity thresholds config: {exc}; upstream stops reading "
+                    f"here: this entry and the {later} after it are dropped; the "
+                    f"{len(entries)} entries read before it apply",
+                    path=where,
+                    line=exc.line,
+                )
             )
             break
     return tuple(entries), tuple(warnings)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.config.correlation_file import load_correlation
 from medkit_replay.config.entity_thresholds_file import load_entity_thresholds
-from medkit_replay.config.nodes import located, values
+from medkit_replay.config.nodes import located, located_warnings, values
 from medkit_replay.config.reader import INT64_MAX, ParameterReader, to_int32
 from medkit_replay.engine.debounce import DebounceConfig
 from medkit_replay.engine.manager import FaultManagerConfig
@@ -39,7 +39,8 @@ def fault_manager_config(
     Raises:
         ConfigError: a parameter of the wrong type, with its file and line.
     """
-    return located(params, lambda: _build(params, release or default_release()))
+    config, warnings = located(params, lambda: _build(params, release or default_release()))
+    return config, located_warnings(params, warnings)
 
 
 def _int32(reader: ParameterReader, name: str, value: int, default: int, *, sanitized: bool) -> int:
@@ -53,7 +54,10 @@ def _int32(reader: ParameterReader, name: str, value: int, default: int, *, sani
     if wrapped != value:
         in_band = wrapped < 0 if default < 0 else wrapped >= 0
         fixed = wrapped if in_band or not sanitized else default
-        reader.warn(f"{name} {value} is outside int32: upstream keeps {wrapped}; using {fixed}")
+        reader.warn(
+            f"{name} {value} is outside int32: upstream keeps {wrapped}; using {fixed}",
+            parameter=name,
+        )
     return wrapped
 
 
@@ -72,7 +76,10 @@ def _storage_type(reader: ParameterReader) -> str:
     name = reader.string("storage_type", DEFAULT_STORAGE_TYPE)
     if name in STORAGE_TYPES:
         return name
-    reader.warn(f"storage_type {name!r} is unknown; using 'memory' (upstream falls back to it)")
+    reader.warn(
+        f"storage_type {name!r} is unknown; using 'memory' (upstream falls back to it)",
+        parameter="storage_type",
+    )
     return "memory"
 
 
@@ -83,23 +90,33 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
     conf = reader.integer("confirmation_threshold", -1)
     if conf > 0:
         reader.warn(
-            f"confirmation_threshold {conf} is positive; using {-conf} (upstream negates it)"
+            f"confirmation_threshold {conf} is positive; using {-conf} (upstream negates it)",
+            parameter="confirmation_threshold",
         )
         conf = -conf
     in_int32 = to_int32(conf) == conf
     conf = _int32(reader, "confirmation_threshold", conf, -1, sanitized=sanitized)
     heal = reader.integer("healing_threshold", 3)
     if heal < 0:
-        reader.warn(f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)")
+        reader.warn(
+            f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)",
+            parameter="healing_threshold",
+        )
         heal = -heal
     heal = _int32(reader, "healing_threshold", heal, 3, sanitized=sanitized)
     auto_sec = reader.double("auto_confirm_after_sec", 0.0)
     if auto_sec < 0:
-        reader.warn(f"auto_confirm_after_sec {auto_sec} is negative; using 0.0")
+        reader.warn(
+            f"auto_confirm_after_sec {auto_sec} is negative; using 0.0",
+            parameter="auto_confirm_after_sec",
+        )
         auto_sec = 0.0
     elif math.isnan(auto_sec):
         # Upstream keeps NaN, and its timer starts only when the value is > 0: never.
-        reader.warn("auto_confirm_after_sec nan is not a number; using 0.0")
+        reader.warn(
+            "auto_confirm_after_sec nan is not a number; using 0.0",
+            parameter="auto_confirm_after_sec",
+        )
         auto_sec = 0.0
     elif auto_sec * NS_PER_SEC > INT64_MAX:
         # Upstream turns the seconds into an int64-nanosecond duration: inf or a value past
@@ -107,12 +124,12 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
         # are int64 nanoseconds), so the closest behaviour that is defined is: never fires.
         # Said where it was written: a value that looks like "wait a long time" but turns the
         # feature off is easy to miss in a layered config.
-        written = params.get("auto_confirm_after_sec")
         reader.warn(
             f"auto_confirm_after_sec {auto_sec} is beyond int64 nanoseconds (292 years): "
             "time-based confirmation can never fire (upstream accepts it and never "
             "auto-confirms); using 0.0 (off)",
-            f"{written.path}:{written.line}" if written is not None else "",
+            parameter="auto_confirm_after_sec",
+            shown_at=True,
         )
         auto_sec = 0.0
     # A release without near misses does not declare the parameter: a value is ignored.
@@ -123,7 +140,8 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
     )
     if near_miss < 0:
         reader.warn(
-            f"near_miss.max_per_fault {near_miss} is negative; using {DEFAULT_NEAR_MISS_BOUND}"
+            f"near_miss.max_per_fault {near_miss} is negative; using {DEFAULT_NEAR_MISS_BOUND}",
+            parameter="near_miss.max_per_fault",
         )
         near_miss = DEFAULT_NEAR_MISS_BOUND
     storage_type = _storage_type(reader)  # upstream creates its storage here
@@ -133,7 +151,9 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
         healing_threshold=heal,
     )
     if conf == 0 and in_int32 and sanitized:
-        reader.warn("confirmation_threshold 0 is invalid; using -1")
+        reader.warn(
+            "confirmation_threshold 0 is invalid; using -1", parameter="confirmation_threshold"
+        )
 
     overrides: tuple[EntityOverride, ...] = ()
     entity_file = params.get("entity_thresholds.config_file")
@@ -158,7 +178,8 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
             if not cleanup_sec > 0:
                 reader.warn(
                     f"correlation.cleanup_interval_sec {cleanup_sec} must be "
-                    f"positive; using {DEFAULT_CLEANUP_INTERVAL_SEC}"
+                    f"positive; using {DEFAULT_CLEANUP_INTERVAL_SEC}",
+                    parameter="correlation.cleanup_interval_sec",
                 )
                 cleanup_sec = DEFAULT_CLEANUP_INTERVAL_SEC
             elif cleanup_sec * 1000 * NS_PER_MS > INT64_MAX:

@@ -9,7 +9,7 @@ import math
 from typing import TYPE_CHECKING
 
 from medkit_replay.engine.local_filter import LocalFilterConfig
-from medkit_replay.errors import ConfigError
+from medkit_replay.errors import ConfigError, ConfigWarning
 from medkit_replay.model import NS_PER_SEC
 
 if TYPE_CHECKING:
@@ -61,10 +61,13 @@ class ParameterReader:
         self.params = params
         self.warnings: list[str] = []
 
-    def warn(self, text: str, where: str = "") -> None:
-        """Record a warning the live node would log at start-up (``where``: the file and line
-        of the value it is about, when known)."""
-        self.warnings.append(f"{where}: {self.node}: {text}" if where else f"{self.node}: {text}")
+    def warn(self, text: str, *, parameter: str | None = None, shown_at: bool = False) -> None:
+        """Record a warning the live node would log at start-up; ``parameter``: the parameter
+        it is about, located by :func:`medkit_replay.config.nodes.located_warnings` (its file
+        and line also shown in the text with ``shown_at``)."""
+        self.warnings.append(
+            ConfigWarning(f"{self.node}: {text}", shown_at=shown_at, parameter=parameter)
+        )
 
     def _wrong(self, name: str, expected: str, value: object, hint: str = "") -> ConfigError:
         problem = (

@@ -16,7 +16,7 @@ from medkit_replay.config.bridges import (
     diagnostic_bridge_config,
     log_bridge_config,
 )
-from medkit_replay.config.nodes import located, values
+from medkit_replay.config.nodes import located, located_warnings, values
 from medkit_replay.config.reader import ParameterReader
 from medkit_replay.config.unknown_keys import unknown_keys
 from medkit_replay.errors import ConfigError
@@ -82,7 +82,9 @@ def replay_options(
     )
     log_params = params.node("log_bridge")
     log, log_warnings = located(log_params, lambda: log_bridge_config(values(log_params), release))
-    warnings += diag_warnings + action_warnings + log_warnings
+    warnings += located_warnings(diag_params, diag_warnings)
+    warnings += located_warnings(action_params, action_warnings)
+    warnings += located_warnings(log_params, log_warnings)
     return (
         ReplayOptions(
             log_bridge=log_enabled or params.mentions("log_bridge"),

@@ -11,9 +11,10 @@ from typing import TYPE_CHECKING
 
 from yaml.constructor import ConstructorError, SafeConstructor
 
-from medkit_replay.config.nodes import located, values
+from medkit_replay.config.file_keys import unknown_map_keys
+from medkit_replay.config.nodes import located, located_warnings, values
 from medkit_replay.config.reader import ParameterReader
-from medkit_replay.errors import ConfigError
+from medkit_replay.errors import ConfigError, ConfigWarning
 from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 from medkit_replay.files import read_limited_text
 from medkit_replay.releases import default_release
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
 
 _P = "snapshots."
 _R = "snapshots.rosbag."
+_FILE_KEYS = ("fault_specific", "patterns", "default_topics")
 
 
 def snapshot_config(
@@ -39,26 +41,39 @@ def snapshot_config(
         ConfigError: a parameter of the wrong type, with its file and line.
     """
     chosen = release or default_release()
-    return located(params, lambda: _build(params, chosen))
+    config, warnings = located(params, lambda: _build(params, chosen))
+    return config, located_warnings(params, warnings)
 
 
 def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[str]]:
     reader = ParameterReader("fault_manager", values(params))
     cooldown = reader.double(_P + "recapture_cooldown_sec", 60.0)
     if cooldown < 0 or math.isnan(cooldown):
-        reader.warn(f"snapshots.recapture_cooldown_sec {cooldown} should be >= 0; disabling it")
+        reader.warn(
+            f"snapshots.recapture_cooldown_sec {cooldown} should be >= 0; disabling it",
+            parameter=_P + "recapture_cooldown_sec",
+        )
         cooldown = 0.0
     max_per_fault = reader.integer(_P + "max_per_fault", 10)
     if max_per_fault < 0:
-        reader.warn(f"snapshots.max_per_fault {max_per_fault} should be >= 0; no limit")
+        reader.warn(
+            f"snapshots.max_per_fault {max_per_fault} should be >= 0; no limit",
+            parameter=_P + "max_per_fault",
+        )
         max_per_fault = 0
     timeout = reader.double(_P + "timeout_sec", 1.0)
     if not timeout > 0:
-        reader.warn(f"snapshots.timeout_sec {timeout} must be positive; using 1.0")
+        reader.warn(
+            f"snapshots.timeout_sec {timeout} must be positive; using 1.0",
+            parameter=_P + "timeout_sec",
+        )
         timeout = 1.0
     max_size = reader.integer(_P + "max_message_size", 65536)
     if max_size <= 0:
-        reader.warn(f"snapshots.max_message_size {max_size} must be positive; using 65536")
+        reader.warn(
+            f"snapshots.max_message_size {max_size} must be positive; using 65536",
+            parameter=_P + "max_message_size",
+        )
         max_size = 65536
     defaults = reader.strings(_P + "default_topics")
     if release.entity_default_snapshots:  # '' is "no defaults" since entity_default came
@@ -69,7 +84,7 @@ def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[s
     file_name = reader.string(_P + "config_file", "")
     if file_name and file_param is not None:
         path = file_param.path.parent / file_name
-        loaded = _load_file(path, reader)
+        loaded = load_snapshot_file(path, reader)
         if loaded is not None:
             fault_specific, patterns, file_defaults = loaded
             if file_defaults and not defaults:
@@ -79,7 +94,10 @@ def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[s
         try:
             re.compile(pattern)
         except re.error as err:
-            reader.warn(f"snapshot pattern {pattern!r} is not a valid regex and is ignored: {err}")
+            reader.warn(
+                f"snapshot pattern {pattern!r} is not a valid regex and is ignored: {err}",
+                parameter=_P + "config_file",
+            )
             continue
         compiled.append((pattern, patterns[pattern]))
     config = SnapshotConfig(
@@ -113,23 +131,38 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
         return switches  # upstream declares the rest only when enabled
     before = reader.double(_R + "duration_sec", 5.0)
     if not before > 0:
-        reader.warn(f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0")
+        reader.warn(
+            f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0",
+            parameter=_R + "duration_sec",
+        )
         before = 5.0
     after = reader.double(_R + "duration_after_sec", 1.0)
     if after < 0:
-        reader.warn(f"snapshots.rosbag.duration_after_sec {after} must be >= 0; using 0.0")
+        reader.warn(
+            f"snapshots.rosbag.duration_after_sec {after} must be >= 0; using 0.0",
+            parameter=_R + "duration_after_sec",
+        )
         after = 0.0
     fmt = reader.string(_R + "format", release.default_bag_format)
     if fmt not in ("mcap", "sqlite3"):
-        reader.warn(f"snapshots.rosbag.format {fmt!r} is unknown; using sqlite3 as upstream does")
+        reader.warn(
+            f"snapshots.rosbag.format {fmt!r} is unknown; using sqlite3 as upstream does",
+            parameter=_R + "format",
+        )
         fmt = "sqlite3"
     size = reader.integer(_R + "max_bag_size_mb", 50)
     if size <= 0:
-        reader.warn("snapshots.rosbag.max_bag_size_mb must be positive; using 50")
+        reader.warn(
+            "snapshots.rosbag.max_bag_size_mb must be positive; using 50",
+            parameter=_R + "max_bag_size_mb",
+        )
         size = 50
     per_fault = reader.integer(_R + "max_bags_per_fault", 1) if release.bag_history else 1
     if per_fault < 0:
-        reader.warn("snapshots.rosbag.max_bags_per_fault must be >= 0; no limit")
+        reader.warn(
+            "snapshots.rosbag.max_bags_per_fault must be >= 0; no limit",
+            parameter=_R + "max_bags_per_fault",
+        )
         per_fault = 0
     return replace(
         switches,
@@ -151,20 +184,31 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
 Loaded = tuple[dict[str, tuple[str, ...]], dict[str, tuple[str, ...]], tuple[str, ...]]
 
 
-def _load_file(path: Path, reader: ParameterReader) -> Loaded | None:
-    """fault_specific, patterns and default_topics of a snapshot config file.
+def load_snapshot_file(path: Path, reader: ParameterReader) -> Loaded | None:
+    """fault_specific, patterns and default_topics of a snapshot config file; its warnings go
+    to ``reader``.
 
     Upstream logs and carries on without the file when it is missing or not YAML; so does this,
-    with a warning. A file of the wrong shape is refused, naming it.
+    with a warning. A file of the wrong shape is refused, naming it. Another key is warned, with
+    the closest known one.
     """
     try:
         text = read_limited_text(path)
     except (OSError, UnicodeDecodeError) as err:
-        reader.warn(f"snapshot config file {path} cannot be read ({err}); ignored as upstream does")
+        reader.warnings.append(
+            ConfigWarning(
+                f"{reader.node}: snapshot config file {path} cannot be read ({err}); ignored as "
+                "upstream does",
+                path=str(path),
+                unusable=True,
+                shown_at=False,
+            )
+        )
         return None
     root = compose_config(text, str(path))
     if root is None:
         return {}, {}, ()
+    reader.warnings += unknown_map_keys(root, _FILE_KEYS, str(path), "snapshot config file")
     try:
         data = SafeConstructor().construct_document(root)
     except ConstructorError as err:

@@ -961,13 +961,22 @@ def test_load_invalid_mode(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("text", ["", "correlation:\n  enabled: false\n", "other: 1\n"])
 def test_load_disabled(tmp_path: Path, text: str) -> None:
-    """§1.1: enabled false (or no section) → an info note, no engine."""
+    """§1.1: enabled false (or no section) → an info note, no engine (and a top-level key
+    upstream does not read is warned)."""
     path = _write(tmp_path, text)
     loaded = load_correlation(path)
     assert loaded.config is None
-    (message,) = loaded.warnings
+    *unknown, message = loaded.warnings
     assert message.startswith(f"{path}: ")
     assert "disabled" in message
+    assert unknown == (
+        [
+            f"{path}:1: correlation file: unknown key 'other' (expected one of: correlation); "
+            "upstream ignores it"
+        ]
+        if text.startswith("other")
+        else []
+    )
 
 
 def test_load_valid_config(tmp_path: Path) -> None:

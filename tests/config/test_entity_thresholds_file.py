@@ -17,6 +17,7 @@ from medkit_replay.engine import (
     FaultManagerConfig,
 )
 from medkit_replay.engine.thresholds import EntityOverride
+from medkit_replay.errors import ConfigWarning
 from medkit_replay.model import ReportRequest
 
 if TYPE_CHECKING:
@@ -209,11 +210,21 @@ def test_values_read_as_yaml_cpp_converts_them(
 
 
 def test_every_field_optional_and_unknown_keys_ignored(tmp_path: Path) -> None:
-    """§1.12: every field optional; unknown keys ignored."""
-    path = write(tmp_path, "/a: {}\n/b: {foo: bar, confirmation_threshold: -2, heal: x}\n")
+    """§1.12: every field optional; unknown keys ignored, as upstream does, and warned with
+    the closest known field."""
+    text = "/a: {}\n/b: {foo: bar, confirmation_threshold: -2, healing_treshold: x}\n"
+    path = write(tmp_path, text)
     entries, warnings = load_entity_thresholds(path)
     assert entries == (entry("/a"), entry("/b", conf=-2))
-    assert warnings == ()
+    expected = "confirmation_threshold, healing_enabled, healing_threshold"
+    assert warnings == (
+        f"{path}:2: entity '/b': unknown key 'foo' (expected one of: {expected}); "
+        "upstream ignores it",
+        f"{path}:2: entity '/b': unknown key 'healing_treshold' "
+        "(did you mean 'healing_threshold'?); upstream ignores it",
+    )
+    located = [(w.line, w.suggestion) for w in warnings if isinstance(w, ConfigWarning)]
+    assert located == [(2, None), (2, "healing_threshold")]
 
 
 def test_duplicate_keys_in_an_entry_first_wins(tmp_path: Path) -> None:
