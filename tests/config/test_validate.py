@@ -176,6 +176,19 @@ def test_a_parameter_file_is_read_with_the_files_it_names(
         ),
         (
             "params.yaml",
+            PARAMS.replace("confirmation_threshold", "confirmaton_threshold"),
+            "fault_manager has no parameter 'confirmaton_threshold' at ros2_medkit 0.7.0 "
+            "(did you mean 'confirmation_threshold'?); upstream ignores it",
+            3,
+        ),
+        (
+            "params.yaml",
+            PARAMS.replace("fault_manager", "fault_manger"),
+            "node 'fault_manger' is not a node the replay models; did you mean 'fault_manager'?",
+            1,
+        ),
+        (
+            "params.yaml",
             PARAMS.replace("-1", "3"),
             "fault_manager: confirmation_threshold 3 is positive; using -3 (upstream negates it)",
             3,
