@@ -81,9 +81,10 @@ def guess_kind(data: object) -> Kind | None:
         return "parameters"
     if isinstance(data.get("correlation"), dict):
         return "correlation"
-    if keys <= _BUDGET_KEYS and keys & {"version", "rules"}:
+    # One known top-level key is enough: a misspelt neighbour is then its reader's to name.
+    if keys & {"version", "rules"}:
         return "budget"
-    if keys <= _SNAPSHOT_KEYS:
+    if keys & _SNAPSHOT_KEYS:
         return "snapshots"
     if _entries_with(data, _GRAPH_KEYS):
         return "graph"

@@ -43,6 +43,19 @@ def test_each_kind_is_told_from_its_shape(kind: str, text: str) -> None:
     assert guess_text_kind(text, "x.yaml") == kind
 
 
+@pytest.mark.parametrize(
+    ("text", "kind"),
+    [
+        ("version: 1\nrulez:\n  - max_confirmed: {ERROR: 0}\n", "budget"),
+        ("rules: []\ntitle: typo of name\n", "budget"),
+        ("default_topic: [/odom]\nfault_specific: {}\n", "snapshots"),
+    ],
+)
+def test_one_known_key_is_enough_beside_a_typo(text: str, kind: str) -> None:
+    """A misspelt key must not hide the file's kind: its reader then names the typo."""
+    assert guess_kind(yaml.safe_load(text)) == kind
+
+
 @pytest.mark.parametrize(("name", "kind"), SHIPPED.items())
 def test_the_shipped_files_are_told_apart(name: str, kind: str) -> None:
     assert guess_text_kind((ROOT / name).read_text(), name) == kind
