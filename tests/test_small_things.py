@@ -1,0 +1,142 @@
+"""The small things a new user trips on: ``-h``, output folders made, written files echoed, the
+progress phase's name, ``--json``'s metavar, a fleet's warnings on the terminal."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from medkit_replay.cli import cli, main
+from medkit_replay.fleet.run import KEPT_WARNINGS, WARNING_CHARS, RunSummary, run_one
+from medkit_replay.fleet.terminal import MAX_WARNING_ROWS, render_summary
+from medkit_replay.outputs.progress import PHASE_LABELS
+
+if TYPE_CHECKING:
+    import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "nav2_mission.jsonl"
+TUNING = ROOT / "examples" / "tuning_fleet"
+SERVICE_CALLS = ROOT / "sample_bags" / "service_calls.mcap"
+
+
+def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    status = main(argv)
+    out, err = capsys.readouterr()
+    assert "Traceback" not in out + err
+    return status, out, err
+
+
+def test_dash_h_is_help_on_the_group_and_every_command(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(["-h"], capsys)
+    assert status == 0 and err == "" and out.startswith("Usage: medkit-replay [OPTIONS]")
+    assert isinstance(cli, click.Group)
+    for name in sorted(cli.commands):
+        status, out, err = run([name, "-h"], capsys)
+        assert status == 0 and err == "", name
+        assert out.startswith(f"Usage: medkit-replay {name} "), name
+        assert "-h, --help" in out, name
+
+
+def test_no_option_shows_text_as_its_metavar(capsys: pytest.CaptureFixture[str]) -> None:
+    for name in sorted(cli.commands):
+        _, out, _ = run([name, "--help"], capsys)
+        assert " TEXT" not in out, name
+    for name in ("analyze", "follow", "diff"):
+        _, out, _ = run([name, "--help"], capsys)
+        assert "--json FILE|-" in out, name
+
+
+def test_analyze_makes_output_folders_and_says_each_file_it_wrote(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    html = tmp_path / "a" / "b" / "report.html"
+    report = tmp_path / "j" / "report.json"
+    mcap = tmp_path / "m" / "events.mcap"
+    tables = tmp_path / "t"
+    argv = ["analyze", str(EXAMPLE), "--html", str(html), "--json", str(report)]
+    status, out, err = run([*argv, "--mcap", str(mcap), "--csv", str(tables)], capsys)
+    assert status == 0 and "ESTOP_PRESSED" in out
+    assert html.is_file() and report.is_file() and mcap.is_file() and tables.is_dir()
+    assert err.splitlines() == [f"wrote {p}" for p in (report, tables, mcap, html)]
+    # --quiet: nothing said; the files are still written (again, over the first ones)
+    html.unlink()
+    status, out, err = run([*argv, "--quiet"], capsys)
+    assert status == 0 and out == "" and err == "" and html.is_file()
+
+
+def test_json_on_standard_output_is_not_announced(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(["analyze", str(EXAMPLE), "--json", "-"], capsys)
+    assert status == 0 and out.startswith("{") and "wrote" not in err
+
+
+def test_sweep_makes_the_page_folder_and_says_what_it_wrote(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    page = tmp_path / "new" / "sweep.html"
+    out_dir = tmp_path / "tables"
+    mission = TUNING / "mission_01.jsonl"
+    vary = "fault_manager.healing_threshold=1,3"
+    argv = ["sweep", str(mission), "--vary", vary, "--jobs", "1", "--html", str(page)]
+    status, out, err = run([*argv, "--out", str(out_dir)], capsys)
+    assert status == 0 and "variants, best first" in out
+    assert page.is_file() and (out_dir / "variants.csv").is_file()
+    assert [line for line in err.splitlines() if line.startswith("wrote ")] == [
+        f"wrote {page}",
+        f"wrote {out_dir}",
+    ]
+    status, out, err = run([*argv, "--quiet"], capsys)
+    assert status == 0 and out == "" and "wrote" not in err
+
+
+def test_suggest_rules_says_the_file_it_wrote(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rules = tmp_path / "rules.yaml"
+    argv = ["suggest-rules", str(TUNING), "--jobs", "1", "--out", str(rules)]
+    status, out, err = run(argv, capsys)
+    assert status == 0 and rules.is_file() and "suggest-rules:" in out
+    assert f"wrote {rules}" in err.splitlines()
+
+
+def test_the_first_progress_phase_says_what_it_reads() -> None:
+    # The pre-pass reads only recorded ReportFault calls (to withhold bridge duplicates).
+    assert PHASE_LABELS["prescan"] == "finding recorded ReportFault calls"
+    assert "service calls" not in PHASE_LABELS.values()
+
+
+def test_a_run_keeps_its_first_warnings(tmp_path: Path) -> None:
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(SERVICE_CALLS.read_bytes()[:9000])  # ends inside a record, no footer
+    run_summary = run_one(cut)
+    assert run_summary.ok and run_summary.warnings >= 2
+    assert 0 < len(run_summary.first_warnings) <= KEPT_WARNINGS
+    assert all(len(w) <= WARNING_CHARS + 40 for w in run_summary.first_warnings)
+    text = render_summary([run_summary])
+    assert f"warnings: {run_summary.warnings}" in text
+    assert "file ends inside a record" in " ".join(text.split())
+
+
+def test_fleet_summary_lists_the_first_warnings_then_how_many_more() -> None:
+    runs = [
+        RunSummary(
+            path=f"m{i:02}.mcap",
+            kind="mcap",
+            messages=1,
+            warnings=4,
+            first_warnings=tuple(f"damage {i}.{j}" for j in range(KEPT_WARNINGS)),
+        )
+        for i in range(6)
+    ]
+    runs.append(RunSummary(path="clean.mcap", kind="mcap", messages=1))
+    text = render_summary(runs)
+    lines = text.splitlines()
+    shown = [line for line in lines if "damage " in line]
+    assert len(shown) == MAX_WARNING_ROWS
+    assert shown[0].strip() == "m00.mcap: damage 0.0"
+    assert "warnings: 24" in text
+    more = 24 - MAX_WARNING_ROWS
+    assert any(line.strip().startswith(f"+{more} more (6 runs with warnings") for line in lines)
+    assert "warnings:" not in render_summary(runs[-1:])
