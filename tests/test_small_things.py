@@ -12,6 +12,8 @@ from medkit_replay.cli import cli, main
 from medkit_replay.fleet.run import KEPT_WARNINGS, WARNING_CHARS, RunSummary, run_one
 from medkit_replay.fleet.terminal import MAX_WARNING_ROWS, render_summary
 from medkit_replay.outputs.progress import PHASE_LABELS
+from medkit_replay.tuning.page import trade_off_svg, y_axis
+from medkit_replay.tuning.ranking import VariantTotal, same_latency
 
 if TYPE_CHECKING:
     import pytest
@@ -140,3 +142,60 @@ def test_fleet_summary_lists_the_first_warnings_then_how_many_more() -> None:
     more = 24 - MAX_WARNING_ROWS
     assert any(line.strip().startswith(f"+{more} more (6 runs with warnings") for line in lines)
     assert "warnings:" not in render_summary(runs[-1:])
+
+
+def _total(variant: str, latency: int | None, confirmed: int = 5, events: int = 9) -> VariantTotal:
+    return VariantTotal(
+        rank=int(variant[1:]),
+        variant=variant,
+        label="",
+        upstream_release="0.7.0",
+        runs=1,
+        failed_runs=0,
+        faults_confirmed=confirmed,
+        latency_mean_ns=latency,
+        flaps=0,
+        confirmed_ns=0,
+        events=events,
+        muted_events=0,
+        near_misses=0,
+        muted_faults=0,
+        budget_failed=0,
+    )
+
+
+def test_latency_is_a_column_only_where_it_differs() -> None:
+    zero = same_latency([_total("v1", 0), _total("v2", 0)])
+    assert zero is not None and "0.00 s in every variant" in zero and "first FAILED" in zero
+    assert same_latency([_total("v1", 0), _total("v2", 2_000_000_000)]) is None
+    assert same_latency([_total("v1", 0)]) is None  # one variant: its figure is the news
+    none = same_latency([_total("v1", None), _total("v2", None)])
+    assert none is not None and "no variant confirmed" in none
+
+
+def test_a_sweep_whose_latency_differs_shows_it_per_variant(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Confirming later (a lower threshold) takes longer: the figure is measured, not 0.
+    mission = TUNING / "mission_01.jsonl"
+    page = tmp_path / "s.html"
+    argv = ["sweep", str(mission), "--jobs", "1", "--html", str(page)]
+    status, out, _ = run([*argv, "--vary", "fault_manager.confirmation_threshold=-1,-2"], capsys)
+    assert status == 0 and "lat s" in out
+    latencies = {line.split()[1]: line.split()[-1] for line in out.splitlines() if " v0" in line}
+    assert latencies["v01"] == "0.00" and float(latencies["v02"]) > 0
+    assert "mean latency (s)" in page.read_text()
+    status, out, _ = run([*argv, "--vary", "fault_manager.healing_threshold=1,3"], capsys)
+    assert status == 0 and "lat s" not in out and "0.00 s in every variant" in " ".join(out.split())
+    text = page.read_text()
+    assert "mean latency (s)" not in text and "0.00 s in every variant" in text
+
+
+def test_the_trade_off_plot_never_has_a_single_y_value() -> None:
+    same = [_total("v1", 0, events=10), _total("v2", 0, events=30)]
+    assert y_axis(same) == "FaultEvents published"
+    svg = trade_off_svg(same)
+    assert "FaultEvents published &#8594;" in svg and ">10<" in svg and ">30<" in svg
+    differ = [_total("v1", 0, confirmed=4), _total("v2", 0, confirmed=6)]
+    assert y_axis(differ) == "faults confirmed"
+    assert "faults confirmed &#8594;" in trade_off_svg(differ)
