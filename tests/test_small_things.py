@@ -8,12 +8,13 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.cli import cli, main
+from medkit_replay.cli import cli
 from medkit_replay.fleet.run import KEPT_WARNINGS, WARNING_CHARS, RunSummary, run_one
 from medkit_replay.fleet.terminal import MAX_WARNING_ROWS, render_summary
 from medkit_replay.outputs.progress import PHASE_LABELS
 from medkit_replay.tuning.page import trade_off_svg, y_axis
 from medkit_replay.tuning.ranking import VariantTotal, same_latency
+from tests.test_cli import run
 
 if TYPE_CHECKING:
     import pytest
@@ -22,13 +23,6 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "nav2_mission.jsonl"
 TUNING = ROOT / "examples" / "tuning_fleet"
 SERVICE_CALLS = ROOT / "sample_bags" / "service_calls.mcap"
-
-
-def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    status = main(argv)
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return status, out, err
 
 
 def test_dash_h_is_help_on_the_group_and_every_command(capsys: pytest.CaptureFixture[str]) -> None:
