@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from medkit_replay.fleet.report import write_report
+from medkit_replay.fleet.run import RunSummary
 from tests.outputs.cdp import Browser
 from tests.outputs.page_shots import WINDOW, build_pages, measure
 from tests.outputs.test_html_browser import chromium
@@ -35,3 +37,19 @@ def test_a_wide_table_would_be_caught(chromium: str, tmp_path: Path) -> None:
     page.write_text(f"<!DOCTYPE html><html><body><table><tr>{cells}</tr></table></body></html>")
     with Browser(chromium, tmp_path / "profile", f"{WINDOW},1000") as browser:
         assert measure(browser, page) > WINDOW
+
+
+def test_a_fleet_of_long_unbroken_text_still_fits(chromium: str, tmp_path: Path) -> None:
+    runs = [
+        RunSummary(
+            path="x" * 600 + f"{i}.mcap",
+            kind="mcap",
+            messages=10**9,
+            error=None if i % 2 else "E" * 3000,
+            top_codes=tuple((f"{'C' * 200}{j}", 5) for j in range(5)),
+        )
+        for i in range(40)
+    ]
+    write_report(runs, tmp_path / "fleet")
+    with Browser(chromium, tmp_path / "profile", f"{WINDOW},1000") as browser:
+        assert measure(browser, tmp_path / "fleet" / "index.html") <= WINDOW
