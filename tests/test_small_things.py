@@ -3,6 +3,7 @@ progress phase's name, ``--json``'s metavar, a fleet's warnings on the terminal.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -193,3 +194,42 @@ def test_the_trade_off_plot_never_has_a_single_y_value() -> None:
     differ = [_total("v1", 0, confirmed=4), _total("v2", 0, confirmed=6)]
     assert y_axis(differ) == "faults confirmed"
     assert "faults confirmed &#8594;" in trade_off_svg(differ)
+
+
+def test_fleet_page_and_summary_agree(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out_dir = tmp_path / "fleet"
+    argv = ["fleet", str(ROOT / "sample_bags"), str(EXAMPLE), "--jobs", "1", "--out", str(out_dir)]
+    status, out, _ = run(argv, capsys)
+    assert status == 0
+    page = (out_dir / "index.html").read_text()
+    card = dict(re.findall(r'<div class="k">([^<]*)</div><div class="v">([^<]*)</div>', page))
+    head = " ".join(out.split())
+    assert (
+        f"fleet: {card['runs']} recordings, {card['replayed']} replayed; "
+        f"{card['messages']} messages read; {card['runs with confirmed']} with a confirmed fault"
+    ) in head
+
+
+def test_sweep_page_and_summary_agree(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    page = tmp_path / "sweep.html"
+    argv = ["sweep", str(TUNING), "--config", str(TUNING / "params.yaml"), "--jobs", "1"]
+    argv += ["--vary", "fault_manager.confirmation_threshold=-1,-2", "--html", str(page)]
+    status, out, _ = run(argv, capsys)
+    assert status == 0
+    terminal = {
+        cells[1]: cells[2:]
+        for line in out.splitlines()
+        if (cells := line.split())[1:2] == ["v01"] or cells[1:2] == ["v02"]
+    }
+    rows = re.findall(
+        r"<tr>(.*?)</tr>", page.read_text().split('id="variants"')[1].split("</table>")[0]
+    )
+    shown = {}
+    for row in rows:
+        texts = re.findall(r"<td[^>]*>([^<]*)</td>", row)
+        if not texts:
+            continue  # the heading row
+        # rank, variant, threshold, release, confirmed, flaps, events, muted, near, muted faults,
+        # mean latency (s), ...
+        shown[texts[1]] = [texts[4], texts[5], texts[6], texts[7], texts[8], texts[10]]
+    assert set(shown) == {"v01", "v02"} and terminal == shown
