@@ -29,7 +29,7 @@ from medkit_replay.outputs.console import echo
 from medkit_replay.version import __version__
 
 
-@click.group()
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="medkit-replay")
 def cli() -> None:
     """Replay recorded ROS 2 traffic through ros2_medkit's fault manager logic.

@@ -282,6 +282,8 @@ def test_html_report_option(tmp_path: Path) -> None:
 
 
 def test_unwritable_output_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    target = tmp_path / "missing-dir" / "report.html"
+    # A missing folder is made (as --csv makes its own); a file in the way of it cannot be.
+    (tmp_path / "a-file").write_text("")
+    target = tmp_path / "a-file" / "sub" / "report.html"
     status, _, err = run(["analyze", str(EXAMPLE), "--html", str(target), "--quiet"], capsys)
     assert status == 2 and err.count("\n") == 1 and "cannot write HTML" in err

@@ -5,7 +5,9 @@ Each module defines one click command; ``medkit_replay.cli`` registers it on the
 
 from __future__ import annotations
 
+import contextlib
 import math
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -93,6 +95,7 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
             "dask_address",
             type=str,
             default=None,
+            metavar="ADDRESS",
             help="Run on this Dask distributed scheduler (needs the 'dask' extra).",
         ),
         click.option(
@@ -122,6 +125,20 @@ STRICT_HELP = (
 def strict_option() -> Callable[[FC], FC]:
     """``--strict``: damage fails the check (``check``; ``fleet``, ``sweep`` with a budget)."""
     return click.option("--strict", is_flag=True, help=STRICT_HELP)
+
+
+def say_written(paths: Iterable[Path | str], *, quiet: bool = False) -> None:
+    """One line per file or folder an option wrote (``wrote report.html``), on standard error
+    so that standard output stays the report or the summary; nothing when ``quiet``."""
+    if quiet:
+        return
+    from medkit_replay.text import printable  # noqa: PLC0415  # not for --help
+
+    # The summary before these lines, where both streams meet (nobody reading it: no order).
+    with contextlib.suppress(BrokenPipeError, ValueError):
+        sys.stdout.flush()
+    for path in paths:
+        click.echo(f"wrote {printable(str(path))}", err=True)
 
 
 def say_damage(losses: Iterable[Loss]) -> bool:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import config_option, input_argument, local_paths, say_written
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
@@ -40,6 +40,7 @@ _REPORT_OPTIONS = (
         "json_out",
         type=str,
         default=None,
+        metavar="FILE|-",
         help="Write the JSON report here ('-': standard output; FILE.gz or FILE.zst compressed).",
     ),
     click.option(
@@ -212,6 +213,8 @@ def write_reports(
     def job(output: FileOutput, target: Path, writer: Callable[[Result, Path], object]) -> Job:
         def write() -> None:
             try:
+                if output.files is None:  # a file: its folder is made, as --csv makes its own
+                    target.parent.mkdir(parents=True, exist_ok=True)
                 writer(result, target)
             except OSError as err:
                 raise MedkitReplayError(
@@ -237,6 +240,7 @@ def write_reports(
                 write_report_stdout(result, ahead)
         elif json_out is not None:
             try:
+                Path(json_out).parent.mkdir(parents=True, exist_ok=True)
                 write_report(result, Path(json_out), ahead)
             except OSError as err:
                 raise MedkitReplayError(
@@ -251,6 +255,8 @@ def write_reports(
         else:
             with standard_output("the summary"):
                 summary.write(text)
+    written: list[str | Path] = [json_out] if json_out is not None and json_out != "-" else []
+    say_written([*written, *(target for _, target in chosen)], quiet=quiet)
 
 
 def _output_paths(

@@ -125,6 +125,7 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
     "json_out",
     type=str,
     default=None,
+    metavar="FILE|-",
     help="Write the differences as JSON here ('-' for standard output).",
 )
 @click.option(

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import config_option, input_argument, local_paths, say_written
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import echo, warn
@@ -156,6 +156,7 @@ def suggest_rules(
             raise MedkitReplayError(
                 f"cannot write the rules: {err.strerror}", path=str(out_path)
             ) from None
+        say_written([out_path])
     else:
         with standard_output("the rules"):
             echo(text, sys.stdout)

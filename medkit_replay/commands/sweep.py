@@ -20,6 +20,7 @@ from medkit_replay.commands import (
     input_argument,
     local_paths,
     say_damage,
+    say_written,
     strict_option,
 )
 from medkit_replay.commands.streams import standard_output
@@ -186,6 +187,7 @@ def sweep(
         from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
 
         try:
+            html_path.parent.mkdir(parents=True, exist_ok=True)
             write_page(html_path, grid, outcome, len(recordings))
         except OSError as err:
             raise MedkitReplayError(
@@ -202,6 +204,7 @@ def sweep(
                 over_budget=outcome.over,
             )
             print_summary(sys.stdout, parts)
+    say_written([p for p in (html_path, out_dir) if p is not None], quiet=quiet)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
     if strict and say_damage(outcome.lost):
         over = True

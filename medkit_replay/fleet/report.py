@@ -21,6 +21,7 @@ import pandas as pd
 from medkit_replay.fleet.stats import codes_table, overview, runs_table
 from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.outputs.csv_safety import write_frame
+from medkit_replay.outputs.html_page import cards, page_end, page_start, scrolling_table
 from medkit_replay.text import clip, xml_text
 from medkit_replay.version import __version__
 
@@ -32,6 +33,12 @@ if TYPE_CHECKING:
 
 FILES = ("runs.csv", "runs.json", "codes.csv", "codes.json", "index.html")
 """What ``write_report`` writes into its folder."""
+NUMERIC = frozenset(
+    {"span (s)", "messages", "confirmed", "healed", "cleared", "prefailed", "prepassed",
+     "runs confirmed", "share of runs", "mean first confirmed (s)", "heals",
+     "mean time to heal (s)", "median time to heal (s)"}
+)  # fmt: skip
+"""Headings of columns of numbers (aligned right)."""
 MAX_CELL_CHARS = 2000
 """Characters of a text cell in index.html; longer text is cut, saying how much."""
 
@@ -153,48 +160,6 @@ def write_report(runs: Sequence[RunSummary], out_dir: Path) -> list[Path]:
 
 # --- HTML -------------------------------------------------------------------------------------
 
-PAGE_STYLE = """
-body { font: 14px/1.4 system-ui, sans-serif; margin: 1.5em; color: #222; }
-h1 { font-size: 1.4em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
-table { border-collapse: collapse; margin-top: .5em; }
-th, td { border: 1px solid #ccc; padding: .25em .5em; text-align: left; vertical-align: top; }
-th { background: #f2f2f2; cursor: pointer; user-select: none; white-space: nowrap; }
-th[aria-sort=ascending]::after { content: " \\25B2"; }
-th[aria-sort=descending]::after { content: " \\25BC"; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; }
-tr.failed td { background: #fdecea; }
-.fail { color: #b00020; font-weight: bold; } .pass { color: #1b7f3b; }
-dl { display: grid; grid-template-columns: max-content auto; gap: .1em 1em; }
-dt { font-weight: bold; } dd { margin: 0; }
-"""
-
-SORT_SCRIPT = """
-document.querySelectorAll("table.sortable").forEach(function (table) {
-  table.querySelectorAll("th").forEach(function (th, column) {
-    th.addEventListener("click", function () {
-      var ascending = th.getAttribute("aria-sort") !== "ascending";
-      table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("aria-sort"); });
-      th.setAttribute("aria-sort", ascending ? "ascending" : "descending");
-      var body = table.tBodies[0];
-      var rows = Array.prototype.slice.call(body.rows);
-      function key(row) {
-        var cell = row.cells[column];
-        var v = cell.getAttribute("data-v");
-        return v === null ? cell.textContent : v;
-      }
-      rows.sort(function (a, b) {
-        var x = key(a), y = key(b);
-        if (x === "" || y === "") { return (x === "") - (y === ""); }
-        var nx = Number(x), ny = Number(y);
-        var c = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : (x < y ? -1 : x > y ? 1 : 0);
-        return ascending ? c : -c;
-      });
-      rows.forEach(function (row) { body.appendChild(row); });
-    });
-  });
-});
-"""
-
 
 def is_missing(value: object) -> bool:
     """Whether a table cell holds no value (None, pandas' NA, NaN)."""
@@ -220,15 +185,6 @@ def _text_cell(value: object, css: str = "") -> str:
     text = "" if is_missing(value) else clip(xml_text(str(value)), MAX_CELL_CHARS)
     attr = f' class="{html.escape(css)}"' if css else ""
     return f"<td{attr}>{html.escape(text)}</td>"
-
-
-def _table(table_id: str, headers: Sequence[str], rows: Sequence[str]) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in headers)
-    body = "\n".join(rows)
-    return (
-        f'<table id="{table_id}" class="sortable">\n<thead><tr>{head}</tr></thead>\n'
-        f"<tbody>\n{body}\n</tbody>\n</table>"
-    )
 
 
 def _runs_rows(frame: pd.DataFrame) -> list[str]:
@@ -279,11 +235,7 @@ def render_html(
 ) -> str:
     """The fleet as one self-contained HTML page (inline style and script, nothing fetched)."""
     counts = overview(runs)
-    facts = "".join(
-        f"<dt>{html.escape(key.replace('_', ' '))}</dt><dd>{value:,}</dd>"
-        for key, value in counts.items()
-    )
-    runs_html = _table(
+    runs_html = scrolling_table(
         "runs",
         [
             "path",
@@ -302,8 +254,9 @@ def render_html(
             "error",
         ],
         _runs_rows(runs_frame),
+        NUMERIC,
     )
-    codes_html = _table(
+    codes_html = scrolling_table(
         "codes",
         [
             "fault code",
@@ -315,18 +268,19 @@ def render_html(
             "median time to heal (s)",
         ],
         _codes_rows(codes_frame),
+        NUMERIC,
     )
     return (
-        "<!DOCTYPE html>\n"
-        '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-        "<title>medkit-replay fleet report</title>\n"
-        f"<style>{PAGE_STYLE}</style>\n</head>\n<body>\n"
-        "<h1>medkit-replay fleet report</h1>\n"
-        f"<p>medkit-replay {html.escape(__version__)}; click a column heading to sort.</p>\n"
-        f"<dl>{facts}</dl>\n"
-        "<h2>Codes confirmed across runs</h2>\n"
-        f"{codes_html}\n"
-        "<h2>Runs</h2>\n"
-        f"{runs_html}\n"
-        f"<script>{SORT_SCRIPT}</script>\n</body>\n</html>\n"
+        page_start(
+            "medkit-replay fleet report",
+            "medkit-replay fleet report",
+            f"medkit-replay {html.escape(__version__)} · click a column heading to sort",
+        )
+        + cards({key.replace("_", " "): value for key, value in counts.items()})
+        + "<h2>Codes confirmed across runs</h2>\n"
+        + codes_html
+        + "\n<h2>Runs</h2>\n"
+        + runs_html
+        + "\n"
+        + page_end()
     )

@@ -19,6 +19,7 @@ from medkit_replay.inputs.recording import input_kind
 from medkit_replay.model import Loss, total_loss
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
+from medkit_replay.text import clip
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -31,6 +32,10 @@ TOP_CODES = 5
 
 KINDS = {"dir": "rosbag2", ".mcap": "mcap", ".db3": "db3", ".bag": "rosbag1", ".jsonl": "script"}
 """A run's ``kind`` by READERS key: a bag directory, a bare storage file, a ROS 1 bag, a script."""
+KEPT_WARNINGS = 3
+"""Warnings a run's summary keeps the text of (the first ones; ``warnings`` counts them all)."""
+WARNING_CHARS = 300
+"""A kept warning is cut here (an ellipsis and the count of characters left out end it)."""
 MAX_ERROR_CHARS = 4000
 """A run's error is cut here (an ellipsis ends it): a message quoting a 10 MB field stays short."""
 
@@ -53,6 +58,8 @@ class RunSummary:
         heals: ``(code, ns)`` for each CONFIRMED→HEALED transition: how long the fault had been
             CONFIRMED, in the order the heals happened.
         warnings: how many warnings the replay gave.
+        first_warnings: the first KEPT_WARNINGS of them, each cut at WARNING_CHARS characters
+            (for the terminal summary; not a column of the tables).
         budget: the budget verdict, ``pass`` or ``fail``; None when no budget was checked.
         budget_failures: the names of the budget's rules that did not hold, in budget order;
             or one line saying what was missing when nothing was replayed.
@@ -73,6 +80,7 @@ class RunSummary:
     confirmed: tuple[tuple[str, int], ...] = ()
     heals: tuple[tuple[str, int], ...] = ()
     warnings: int = 0
+    first_warnings: tuple[str, ...] = ()
     budget: str | None = None
     budget_failures: tuple[str, ...] = ()
     error: str | None = None
@@ -149,6 +157,7 @@ def summarize(path: str, kind: str, result: Result) -> RunSummary:
         confirmed=tuple(first_confirmed.items()),
         heals=tuple(heals),
         warnings=len(result.warnings),
+        first_warnings=tuple(clip(w, WARNING_CHARS) for w in result.warnings[:KEPT_WARNINGS]),
         lost=total_loss(result.losses, path) if result.losses else None,
         upstream_release=result.upstream_release,
     )

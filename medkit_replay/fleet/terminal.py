@@ -38,6 +38,8 @@ MAX_CODE_ROWS = 20
 """Codes listed on the terminal."""
 MAX_ERROR_ROWS = 20
 """Failed recordings listed on the terminal."""
+MAX_WARNING_ROWS = 10
+"""Warnings listed on the terminal (the first ones of the runs in order); runs.csv counts all."""
 
 
 def _seconds(value: float | None) -> str:
@@ -137,6 +139,7 @@ def summary_renderables(
         if len(over) > MAX_ERROR_ROWS:
             more = len(over) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
+    parts.extend(_warnings(runs))
     failed = [run for run in runs if not run.ok]
     if failed:
         parts.append(Text("not replayed:", style="bold red"))
@@ -149,6 +152,34 @@ def summary_renderables(
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
     if out_dir is not None:
         parts.append(Text(f"report: {printable(str(out_dir))}/ ({', '.join(FILES)})"))
+    return parts
+
+
+def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
+    """The runs' warnings, the first MAX_WARNING_ROWS of them, then how many more."""
+    total = sum(run.warnings for run in runs)
+    if not total:
+        return []
+    parts: list[RenderableType] = [Text(f"warnings: {total:,}", style="bold yellow")]
+    shown = 0
+    for run in runs:
+        for warning in run.first_warnings:
+            if shown == MAX_WARNING_ROWS:
+                break
+            said = warning if warning.startswith(run.path) else f"{run.path}: {warning}"
+            parts.append(_indented(Text(printable(said))))
+            shown += 1
+    if total > shown:
+        within = sum(1 for run in runs if run.warnings)
+        parts.append(
+            _indented(
+                Text(
+                    f"+{total - shown:,} more ({within:,} runs with warnings: runs.csv counts "
+                    "them; analyze a run to read all of its own)",
+                    style="dim",
+                )
+            )
+        )
     return parts
 
 

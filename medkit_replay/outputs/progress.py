@@ -30,7 +30,10 @@ if TYPE_CHECKING:
 
     from medkit_replay.model import Phase, Progress as ReplayProgress
 
-PHASE_LABELS: dict[str, str] = {"prescan": "service calls", "replay": "replaying"}
+PHASE_LABELS: dict[str, str] = {
+    "prescan": "finding recorded ReportFault calls",
+    "replay": "replaying",
+}
 """What each pass of the replay is called on the bar."""
 
 

@@ -172,3 +172,19 @@ def _with_rank(total: VariantTotal, rank: int) -> VariantTotal:
     values = {f.name: getattr(total, f.name) for f in fields(VariantTotal)}
     values["rank"] = rank
     return VariantTotal(**values)
+
+
+def same_latency(totals: Sequence[VariantTotal]) -> str | None:
+    """Why the latency column is left out, when it would compare nothing: the same mean detection
+    latency in every one of two or more variants (0 when each fault confirms on its first FAILED
+    report: ``confirmation_threshold`` -1 or a CRITICAL report); None when it differs."""
+    values = {total.latency_mean_ns for total in totals}
+    if len(totals) < 2 or len(values) != 1:
+        return None
+    (value,) = values
+    if value is None:
+        return "no variant confirmed a fault, so there is no detection latency to compare"
+    what = f"mean detection latency is {value / 1e9:,.2f} s in every variant"
+    if value == 0:
+        what += " (each fault confirmed on its first FAILED report)"
+    return f"{what}: the same everywhere, so not a column"

@@ -16,7 +16,7 @@ from rich.text import Text
 from medkit_replay.outputs.console import literal_console, plain_text
 from medkit_replay.result import release_line
 from medkit_replay.text import printable
-from medkit_replay.tuning.ranking import RANKING
+from medkit_replay.tuning.ranking import RANKING, same_latency
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -60,7 +60,10 @@ def summary_renderables(
     )
     table.add_column("#", justify="right", no_wrap=True)
     table.add_column("variant", overflow="fold", min_width=20, ratio=1)
-    names = ["conf", "flaps", "events", "muted", "near", "lat s"]
+    latency_note = same_latency(totals)
+    names = ["conf", "flaps", "events", "muted", "near"]
+    if latency_note is None:
+        names.append("lat s")
     if budget:
         names.append("over")
     for name in names:
@@ -74,8 +77,9 @@ def summary_renderables(
             f"{total.events:,}",
             f"{total.muted_events:,}",
             f"{total.near_misses:,}",
-            _seconds(total.latency_mean_ns),
         ]
+        if latency_note is None:
+            cells.append(_seconds(total.latency_mean_ns))
         if budget:
             over = total.budget_failed
             cells.append(Text(f"{over:,}", style="bold red" if over else ""))
@@ -83,8 +87,8 @@ def summary_renderables(
     parts.append(table)
     legend = (
         "conf: faults confirmed (summed over inputs); flaps: confirm-heal cycles; events: "
-        "FaultEvents published; muted: events muted by correlation; near: near misses; lat s: "
-        "mean detection latency"
+        "FaultEvents published; muted: events muted by correlation; near: near misses"
+        + ("; lat s: mean detection latency" if latency_note is None else f"; {latency_note}")
         + ("; over: inputs over budget" if budget else "")
         + f". Ranked by {RANKING}."
     )

@@ -141,7 +141,7 @@ def test_html_is_escaped_self_contained_and_sortable(tmp_path: Path) -> None:
     parser = _Collector()
     parser.feed(page)
     assert parser.tags.count("table") == 2
-    assert ("class", "sortable") in parser.attrs
+    assert ("class", "data sortable") in parser.attrs  # analyze's table style, sortable
     shown = NASTY.replace("\x1b", "\\x1b")  # controls shown as escapes, the rest exactly
     assert f"fleet/{shown}.jsonl" in parser.cells
     assert "MOTOR_HOT:3; WIFI:1" in parser.cells

@@ -157,7 +157,8 @@ def test_outputs_may_not_overwrite_an_input(
 
 def test_an_unwritable_page_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     script = flapping(tmp_path / "wifi.jsonl")
-    page = tmp_path / "missing" / "sweep.html"
+    (tmp_path / "a-file").write_text("")  # a missing folder is made; a file in its way is not
+    page = tmp_path / "a-file" / "sub" / "sweep.html"
     argv = ["sweep", str(script), "--vary", "fault_manager.healing_threshold=1", "--jobs", "1"]
     status, _, err = run([*argv, "--html", str(page), "--quiet"], capsys)
     assert status == 2
