@@ -37,6 +37,7 @@ from medkit_replay.outputs.html_timeline import (
     build_lanes,
     page_data,
 )
+from medkit_replay.outputs.muting import muting_sentence
 from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
@@ -259,6 +260,10 @@ def _rules(result: Result) -> dict[str, dict[str, object]]:
     return {str(r.get("id")): r for r in rules if isinstance(r, dict)}
 
 
+_LAST_DELAY = "last muted after root (ms)"
+"""The muted table's delay column: upstream's delay_ms, which the last mute overwrote."""
+
+
 def _correlation(result: Result, span: Span) -> str:
     rules = _rules(result)
 
@@ -276,7 +281,7 @@ def _correlation(result: Result, span: Span) -> str:
         why = (
             f"a member of a cluster represented by {m.root_cause_code}{within}"
             if mode == "auto_cluster"
-            else f"a symptom of root cause {m.root_cause_code}, {m.delay_ms} ms after it{within}"
+            else f"a symptom of root cause {m.root_cause_code}{within}"
         )
         muted_rows.append(
             [
@@ -284,16 +289,16 @@ def _correlation(result: Result, span: Span) -> str:
                 text(m.root_cause_code),
                 text(rule_text(m.rule_id)),
                 (str(m.delay_ms), m.delay_ms),
-                text(f"muted as {why}: its FaultEvents were withheld"),
+                text(f"muted as {why}. {muting_sentence(result, m)}"),
             ]
         )
     muted = table(
         "muted-table",
         "Muted faults",
-        ["fault_code", "root cause", "rule", "delay (ms)", "why"],
+        ["fault_code", "root cause", "rule", _LAST_DELAY, "why"],
         muted_rows,
         len(result.muted_faults),
-        numeric=frozenset({"delay (ms)"}),
+        numeric=frozenset({_LAST_DELAY}),
     )
     cards = []
     for c in result.clusters:
