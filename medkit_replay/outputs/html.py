@@ -91,12 +91,15 @@ def _n(count: int, noun: str) -> str:
 
 def _header(result: Result, span: Span) -> str:
     s = result.summary
-    if s.start_ns is None or s.end_ns is None:
+    start, end = result.span()  # as the terminal's summary says it
+    length = 0 if start is None or end is None else end - start
+    if start is None or end is None:
         recorded = "nothing was read"
     else:
         recorded = (
-            f"{seconds(s.duration_ns)} s of bag time, from {s.start_ns} ns{_utc(s.start_ns)} to "
-            f"{s.end_ns} ns (times below are seconds from the start)"
+            f"{seconds(length)} s of bag time, from {start} ns{_utc(start)} to "
+            f"{end} ns (times below are seconds from the start)"
+            + ("; no message was read" if s.start_ns is None else "")
         )
     names = listed(i.path for i in result.inputs) or "no input"
     inputs = []
@@ -133,7 +136,7 @@ def _header(result: Result, span: Span) -> str:
     )
     events = " · ".join(f"{k.removeprefix('fault_')} {s.events.get(k, 0)}" for k in EVENT_KINDS)
     cards = [
-        ("Bag time", f"{seconds(s.duration_ns)} s", f"{s.messages_read:,} messages read"),
+        ("Bag time", f"{seconds(length)} s", f"{s.messages_read:,} messages read"),
         (
             "Reports",
             f"{s.reports:,}",
