@@ -361,11 +361,22 @@ def _header(
         )
     ]
     muted = next((m for m in result.muted_faults if m.fault_code == code), None)
+    first = next(
+        (
+            e.fields["delay_ms"]
+            for e in entries
+            if e.kind == "correlation"
+            and e.fields.get("fault_code") == code
+            and e.fields.get("should_mute")
+        ),
+        None,
+    )
     if muted is not None:
+        first_ms = first if isinstance(first, int) and not trace.before else None
         lines.append(
             (
                 part("muted at the end of the run: ", "muted"),
-                part(muting_sentence(result, muted), "plain"),
+                part(muting_sentence(result, muted, first_ms), "plain"),
             )
         )
     if closest is not None:

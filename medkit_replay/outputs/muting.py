@@ -53,18 +53,20 @@ def events_words(events: MutedEvents) -> str:
     return f"{withheld}; {published}"
 
 
-def delay_words(muted: MutedFault) -> str:
-    """Upstream's ``delay_ms`` named for what it measures: the last mute, not the first."""
-    return f"last muted {muted.delay_ms} ms after its root {muted.root_cause_code}"
+def delay_words(muted: MutedFault, first_ms: int | None = None) -> str:
+    """Upstream's ``delay_ms`` named for what it measures: the last mute, not the first (said
+    too when known, from a trace)."""
+    first = f"first muted {first_ms} ms, " if first_ms is not None else ""
+    return f"{first}last muted {muted.delay_ms} ms after its root {muted.root_cause_code}"
 
 
-def muting_sentence(result: Result, muted: MutedFault) -> str:
+def muting_sentence(result: Result, muted: MutedFault, first_ms: int | None = None) -> str:
     """The one sentence every output uses for a muted fault: which of its events were withheld,
-    which published, and which mute the delay measures.
+    which published, and which mute the delay measures; ``first_ms``: the first mute's delay,
+    which only a trace knows (``explain``).
 
     E.g. ``FaultEvents: withheld 1 fault_confirmed; published 3 fault_updated, 1 fault_cleared;
-    last muted 3,496 ms after its root MOTOR_OVERCURRENT``.
+    last muted 3496 ms after its root MOTOR_OVERCURRENT``.
     """
-    return f"FaultEvents: {events_words(muted_events(result, muted.fault_code))}; " + delay_words(
-        muted
-    )
+    words = events_words(muted_events(result, muted.fault_code))
+    return f"FaultEvents: {words}; {delay_words(muted, first_ms)}"

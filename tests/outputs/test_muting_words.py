@@ -28,7 +28,8 @@ RULES = [ROOT / "rules" / "nav2" / "fault_manager.yaml", ROOT / "rules" / "nav2"
 SENTENCE = re.compile(
     r"FaultEvents: (?:withheld (?P<withheld>[^;]+)|no event withheld); "
     r"(?:published (?P<published>[^;]+)|none published); "
-    r"last muted (?P<delay>\d+) ms after its root (?P<root>[A-Za-z0-9_]+)"
+    r"(?:first muted (?P<first>\d+) ms, )?last muted (?P<delay>\d+) ms after its root "
+    r"(?P<root>[A-Za-z0-9_]+)"
 )
 
 
@@ -115,14 +116,24 @@ def test_healing_at_0_6_0_publishes_no_clear_and_the_words_follow(tmp_path: Path
         _held(_said(unescape(render_html(result)), code, codes), report, code)
 
 
-def test_explain_says_the_same_sentence(tmp_path: Path) -> None:
+def test_explain_says_the_same_sentence_and_the_first_mute() -> None:
     for code in ("WHEEL_ODOMETRY_SLIP", "MOTOR_LEFT_COMM_LINK"):
         trace = FaultTrace(fault_code=code)
         result = replay([MISSION], RULES, trace=trace)
-        text = render_story(build_story(result, trace), width=1000)
+        story = build_story(result, trace)
+        text = render_story(story, width=1000)
         report = json.loads(dumps(result))
-        _held(_said(text, code, [code]), report, code)
-        assert "last muted" in text and "this report" in text
+        said = _said(text, code, [code])
+        _held(said, report, code)
+        mutes = [
+            e.fields["delay_ms"]
+            for e in story.entries
+            if e.kind == "correlation"
+            and e.fields["fault_code"] == code
+            and e.fields["should_mute"]
+        ]
+        assert said["first"] is not None and int(said["first"]) == mutes[0]
+        assert f"this report {mutes[0]} ms after the root: muted" in text
 
 
 def test_the_muted_table_says_it_too(mission: Result) -> None:
