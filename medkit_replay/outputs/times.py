@@ -17,23 +17,23 @@ def from_start(t_ns: int, origin_ns: int) -> str:
     return f"{seconds(t_ns - origin_ns)} s"
 
 
-def clock_time(t_ns: int) -> str:
-    """Absolute bag time: ``HH:MM:SS.mmm`` UTC for clock times, ``t=S s`` for script times."""
+def _utc(t_ns: int, form: str) -> str | None:
+    """A clock-like bag time in UTC to the millisecond; None for a script's own seconds."""
     if t_ns < EPOCH_FLOOR_NS:
-        return f"t={seconds(t_ns)}"
+        return None
     try:
         moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
-    except (OverflowError, ValueError, OSError):
-        return f"t={t_ns // 10**9}"
-    return f"{moment:%H:%M:%S}.{(t_ns % 10**9) // 10**6:03d}"
+    except (OverflowError, ValueError, OSError):  # beyond what a date can show
+        return None
+    return f"{moment.strftime(form)}.{(t_ns % 10**9) // 10**6:03d}"
+
+
+def clock_time(t_ns: int) -> str:
+    """Absolute bag time: ``HH:MM:SS.mmm`` UTC for clock times, ``t=S`` for script times."""
+    return _utc(t_ns, "%H:%M:%S") or f"t={seconds(t_ns)}"
 
 
 def start_text(t_ns: int) -> str:
     """The recording's start as a date (UTC), or a script's own time."""
-    if t_ns < EPOCH_FLOOR_NS:
-        return f"t = {seconds(t_ns)} s"
-    try:
-        moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
-    except (OverflowError, ValueError, OSError):
-        return f"t = {t_ns // 10**9} s"
-    return f"{moment:%Y-%m-%d %H:%M:%S}.{(t_ns % 10**9) // 10**6:03d} UTC"
+    stamp = _utc(t_ns, "%Y-%m-%d %H:%M:%S")
+    return f"{stamp} UTC" if stamp else f"t = {seconds(t_ns)} s"
