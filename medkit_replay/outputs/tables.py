@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import fields
+from numbers import Integral
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
@@ -211,26 +212,39 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
         "recordings": [_recording_row(recording_dict(r)) for r in result.recordings],
     }
     start = result.span()[0] or 0
-    return {
-        name: _frame([_people_row(row, start) for row in rows[name]], columns)
-        for name, columns in TABLE_COLUMNS.items()
-    }
+    frames = {}
+    for name, columns in TABLE_COLUMNS.items():
+        base = [c for c in columns if c not in SECONDS_COLUMNS and c != SEVERITY_NAME]
+        frame = _frame(rows[name], base)
+        for column in base:
+            if column in TIME_COLUMNS:
+                frame[seconds_column(column)] = _seconds(frame[column], start, column)
+            elif column == "severity":
+                frame[SEVERITY_NAME] = frame[column].map(_severity_name).astype(object)
+        frames[name] = frame[columns]
+    return frames
 
 
-def _people_row(row: dict[str, object], start_ns: int) -> dict[str, object]:
-    """The row with seconds from the start beside its times and severity's name beside it."""
-    out = dict(row)
-    for column, value in row.items():
-        if column in TIME_COLUMNS:
-            never = column == "last_passed_ns" and value == 0  # upstream's "never passed"
-            out[seconds_column(column)] = (
-                round((value - start_ns) / NS_PER_SEC, 9)
-                if isinstance(value, int) and not never
-                else None
-            )
-        elif column == "severity" and isinstance(value, int):
-            out[SEVERITY_NAME] = severity_name(value)
-    return out
+def _seconds(times: pd.Series, start_ns: int, column: str) -> pd.Series:
+    """Seconds from the start of a time column (vectorised when it is int64); empty where the
+    time is, and where ``last_passed_ns`` is 0 (upstream's "never passed")."""
+    never = column == "last_passed_ns"
+    if times.dtype == "int64":
+        shown = ((times - start_ns) / NS_PER_SEC).round(9)
+        return shown.where(times != 0) if never else shown
+    return times.map(
+        lambda v: (
+            round((v - start_ns) / NS_PER_SEC, 9)
+            if isinstance(v, int) and not (never and v == 0)
+            else None
+        )
+    ).astype("float64")
+
+
+def _severity_name(value: object) -> str | None:
+    if isinstance(value, Integral) and not isinstance(value, bool):
+        return severity_name(int(value))
+    return None
 
 
 def _frame(rows: list[dict[str, object]], columns: list[str]) -> pd.DataFrame:
