@@ -134,7 +134,7 @@ def test_csv_tables(tmp_path: Path) -> None:
         )
     )
     header = (tmp_path / "t" / "faults.csv").read_text().splitlines()[0]
-    assert header.startswith("fault_code,severity,description")
+    assert header.startswith("fault_code,severity,severity_name,description")
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:

@@ -109,10 +109,12 @@ def _replay_following(
     from medkit_replay.inputs.watch import FollowRestart  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
-    live = None if stream is None else _printer(stream)
+    live, live_start = (None, None) if stream is None else _printer(stream)
     while True:
         try:
-            result = replay([recording], list(configs), follow=control, live=live)
+            result = replay(
+                [recording], list(configs), follow=control, live=live, live_start=live_start
+            )
         except FollowRestart as restart:
             echo(f"medkit-replay: {restart.reason}; replaying it from its start\n", sys.stderr)
             control.restart(restart.reason)
@@ -143,25 +145,36 @@ def _wait_to_appear(recording: Path, control: Follow) -> None:
             raise InputError("input not found", path=str(recording)) from None
 
 
-def _printer(stream: TextIO) -> Callable[[Transition | FaultEvent], None]:
-    """Writes each record's line at once; a reader that went away ends the lines quietly."""
-    from medkit_replay.outputs.live import live_line  # noqa: PLC0415
+def _printer(
+    stream: TextIO,
+) -> tuple[Callable[[Transition | FaultEvent], None], Callable[[int], None]]:
+    """Writes each record's line at once, its time counted from the recording's start (said
+    in a header line when known); a reader that went away ends the lines quietly."""
+    from medkit_replay.outputs.live import live_line, start_line  # noqa: PLC0415
 
     gone = False
+    origin: list[int] = []
 
-    def show(record: Transition | FaultEvent) -> None:
+    def write(line: str) -> None:
         nonlocal gone
         if gone:
             return
         try:
-            stream.write(live_line(record) + "\n")
+            stream.write(line + "\n")
             stream.flush()
         except BrokenPipeError:
             gone = True
             if stream is sys.stdout:
                 discard_stdout()
 
-    return show
+    def start(origin_ns: int) -> None:
+        origin[:] = [origin_ns]
+        write(start_line(origin_ns))
+
+    def show(record: Transition | FaultEvent) -> None:
+        write(live_line(record, origin[0] if origin else None))
+
+    return show, start
 
 
 @contextmanager

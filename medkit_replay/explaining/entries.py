@@ -268,7 +268,10 @@ class EntryBuilder:
             line += [
                 part("root of ", "plain"),
                 part(item.fault_code, "code"),
-                part(f" under {rule_text(rule)}, {item.delay_ms} ms after this fault: ", "dim"),
+                part(
+                    f" under {rule_text(rule)}, that report {item.delay_ms} ms after this fault: ",
+                    "dim",
+                ),
                 part("muted" if item.should_mute else "not muted", "muted"),
             ]
         elif item.is_root_cause:
@@ -283,7 +286,10 @@ class EntryBuilder:
             line += [
                 part("symptom of ", "plain"),
                 part(item.root_cause_code, "code"),
-                part(f" under {rule_text(rule)}, {item.delay_ms} ms after the root: ", "dim"),
+                part(
+                    f" under {rule_text(rule)}, this report {item.delay_ms} ms after the root: ",
+                    "dim",
+                ),
                 part("muted" if item.should_mute else "not muted (mute_symptoms off)", "muted"),
             ]
         elif item.cluster_id:

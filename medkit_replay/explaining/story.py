@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.explaining.entries import ENTRY_BUILDERS, EntryBuilder, when
 from medkit_replay.explaining.evidence import evidence_entries
 from medkit_replay.explaining.lines import Entry, Line, part
+from medkit_replay.outputs.muting import muting_sentence
 from medkit_replay.text import severity_name
 from medkit_replay.trace import CorrelationDecision, TracedReport, TracedTransition, item_time
 
@@ -199,7 +200,7 @@ def state_lines(at: StateAt | None, origin_ns: int, code: str) -> tuple[list[Lin
             (
                 part("muted by ", "muted"),
                 part(m.root_cause_code, "code"),
-                part(f" under rule {m.rule_id}, {m.delay_ms} ms after the root", "dim"),
+                part(f" under rule {m.rule_id}, last muted {m.delay_ms} ms after the root", "dim"),
             )
         )
     for cluster in at.clusters:
@@ -359,6 +360,25 @@ def _header(
             part(f"{counts.get('event_withheld', 0)} withheld", "plain"),
         )
     ]
+    muted = next((m for m in result.muted_faults if m.fault_code == code), None)
+    first = next(
+        (
+            e.fields["delay_ms"]
+            for e in entries
+            if e.kind == "correlation"
+            and e.fields.get("fault_code") == code
+            and e.fields.get("should_mute")
+        ),
+        None,
+    )
+    if muted is not None:
+        first_ms = first if isinstance(first, int) and not trace.before else None
+        lines.append(
+            (
+                part("muted at the end of the run: ", "muted"),
+                part(muting_sentence(result, muted, first_ms), "plain"),
+            )
+        )
     if closest is not None:
         margin = closest.debounce_counter - closest.confirmation_threshold
         lines.append(

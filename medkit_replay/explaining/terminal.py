@@ -7,7 +7,6 @@ as markup; our own words are styled by their role.
 from __future__ import annotations
 
 import sys
-from datetime import UTC, datetime
 from typing import TYPE_CHECKING, TextIO
 
 from rich.console import Group
@@ -15,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.outputs.console import draw, literal_console, plain_text
+from medkit_replay.outputs.times import EPOCH_FLOOR_NS, clock_time, start_text
 from medkit_replay.result import release_line
 from medkit_replay.text import clip, printable, seconds
 
@@ -26,8 +26,6 @@ if TYPE_CHECKING:
 
 MAX_PART = 300
 """Characters of one recorded text shown (the JSON holds it whole)."""
-EPOCH_FLOOR_NS = 10**18
-"""Bag times from here on are clock times (UTC); smaller ones are a script's own seconds."""
 STYLES = {
     "kind": "bold",
     "dim": "dim",
@@ -51,28 +49,6 @@ STYLES = {
     "status:PREFAILED": "yellow",
     "status:PREPASSED": "dim",
 }
-
-
-def clock_time(t_ns: int) -> str:
-    """Absolute bag time: ``HH:MM:SS.mmm`` UTC for clock times, ``t=S s`` for script times."""
-    if t_ns < EPOCH_FLOOR_NS:
-        return f"t={seconds(t_ns)}"
-    try:
-        moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
-    except (OverflowError, ValueError, OSError):
-        return f"t={t_ns // 10**9}"
-    return f"{moment:%H:%M:%S}.{(t_ns % 10**9) // 10**6:03d}"
-
-
-def start_text(t_ns: int) -> str:
-    """The recording's start as a date (UTC), or a script's own time."""
-    if t_ns < EPOCH_FLOOR_NS:
-        return f"t = {seconds(t_ns)} s"
-    try:
-        moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
-    except (OverflowError, ValueError, OSError):
-        return f"t = {t_ns // 10**9} s"
-    return f"{moment:%Y-%m-%d %H:%M:%S}.{(t_ns % 10**9) // 10**6:03d} UTC"
 
 
 def styled(line: Line) -> Text:

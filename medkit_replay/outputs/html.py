@@ -37,6 +37,7 @@ from medkit_replay.outputs.html_timeline import (
     build_lanes,
     page_data,
 )
+from medkit_replay.outputs.muting import muting_sentence
 from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
@@ -90,12 +91,15 @@ def _n(count: int, noun: str) -> str:
 
 def _header(result: Result, span: Span) -> str:
     s = result.summary
-    if s.start_ns is None or s.end_ns is None:
+    start, end = result.span()  # as the terminal's summary says it
+    length = 0 if start is None or end is None else end - start
+    if start is None or end is None:
         recorded = "nothing was read"
     else:
         recorded = (
-            f"{seconds(s.duration_ns)} s of bag time, from {s.start_ns} ns{_utc(s.start_ns)} to "
-            f"{s.end_ns} ns (times below are seconds from the start)"
+            f"{seconds(length)} s of bag time, from {start} ns{_utc(start)} to "
+            f"{end} ns (times below are seconds from the start)"
+            + ("; no message was read" if s.start_ns is None else "")
         )
     names = listed(i.path for i in result.inputs) or "no input"
     inputs = []
@@ -132,7 +136,7 @@ def _header(result: Result, span: Span) -> str:
     )
     events = " · ".join(f"{k.removeprefix('fault_')} {s.events.get(k, 0)}" for k in EVENT_KINDS)
     cards = [
-        ("Bag time", f"{seconds(s.duration_ns)} s", f"{s.messages_read:,} messages read"),
+        ("Bag time", f"{seconds(length)} s", f"{s.messages_read:,} messages read"),
         (
             "Reports",
             f"{s.reports:,}",
@@ -259,6 +263,10 @@ def _rules(result: Result) -> dict[str, dict[str, object]]:
     return {str(r.get("id")): r for r in rules if isinstance(r, dict)}
 
 
+_LAST_DELAY = "last muted after root (ms)"
+"""The muted table's delay column: upstream's delay_ms, which the last mute overwrote."""
+
+
 def _correlation(result: Result, span: Span) -> str:
     rules = _rules(result)
 
@@ -276,7 +284,7 @@ def _correlation(result: Result, span: Span) -> str:
         why = (
             f"a member of a cluster represented by {m.root_cause_code}{within}"
             if mode == "auto_cluster"
-            else f"a symptom of root cause {m.root_cause_code}, {m.delay_ms} ms after it{within}"
+            else f"a symptom of root cause {m.root_cause_code}{within}"
         )
         muted_rows.append(
             [
@@ -284,16 +292,16 @@ def _correlation(result: Result, span: Span) -> str:
                 text(m.root_cause_code),
                 text(rule_text(m.rule_id)),
                 (str(m.delay_ms), m.delay_ms),
-                text(f"muted as {why}: its FaultEvents were withheld"),
+                text(f"muted as {why}. {muting_sentence(result, m)}"),
             ]
         )
     muted = table(
         "muted-table",
         "Muted faults",
-        ["fault_code", "root cause", "rule", "delay (ms)", "why"],
+        ["fault_code", "root cause", "rule", _LAST_DELAY, "why"],
         muted_rows,
         len(result.muted_faults),
-        numeric=frozenset({"delay (ms)"}),
+        numeric=frozenset({_LAST_DELAY}),
     )
     cards = []
     for c in result.clusters:

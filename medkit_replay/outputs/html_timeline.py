@@ -66,9 +66,9 @@ class Span:
 
     @classmethod
     def of(cls, result: Result) -> Span:
-        """From the summary; a span of at least 1 ms, so positions are always defined."""
-        start = result.summary.start_ns
-        end = result.summary.end_ns
+        """The recording's span (``Result.span``, as the terminal and ``explain`` count from);
+        at least 1 ms, so positions are always defined."""
+        start, end = result.span()
         if start is None or end is None:
             start = end = 0
         return cls(start, max(end, start + NS_PER_SEC // 1000))

@@ -12,7 +12,12 @@ from typing import TYPE_CHECKING, Any
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.atomic import atomic_binary
 from medkit_replay.outputs.console import warn as warn_stderr
-from medkit_replay.outputs.tables import TABLE_COLUMNS, encodable, result_tables
+from medkit_replay.outputs.tables import (
+    SECONDS_COLUMNS,
+    TABLE_COLUMNS,
+    encodable,
+    result_tables,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -53,7 +58,8 @@ BOOL_COLUMNS = frozenset(
     {"muted", "accepted", "success", "skip_correlation_auto_clear", "retained", "freeze_frame"}
 )
 LIST_COLUMNS = frozenset({"reporting_sources", "cluster_ids", "auto_cleared_codes", "fault_codes"})
-"""Columns stored as list<string>; every other column is a (nullable) string."""
+"""Columns stored as list<string>; seconds from the start are float64; every other column is a
+(nullable) string."""
 INT64_MIN = -(2**63)
 INT64_MAX = 2**63 - 1
 
@@ -83,6 +89,8 @@ def arrow_schema(table: str) -> Any:
     for column in TABLE_COLUMNS[table]:
         if column in INT_COLUMNS:
             kind = pa.int64()
+        elif column in SECONDS_COLUMNS:
+            kind = pa.float64()
         elif column in BOOL_COLUMNS:
             kind = pa.bool_()
         elif column in LIST_COLUMNS:

@@ -1,6 +1,8 @@
 """The report's tables as pandas DataFrames, and CSV files of them.
 
-Built from one Result with the JSON report's field names; list fields stay Python lists.
+Built from one Result with the JSON report's field names; list fields stay Python lists. For
+people, each nanosecond time gains seconds from the recording's start beside it, and each
+severity number its name.
 CSV cells that a spreadsheet would run as formulas are neutralised (outputs/csv_safety.py).
 """
 
@@ -8,11 +10,13 @@ from __future__ import annotations
 
 import json
 from dataclasses import fields
+from numbers import Integral
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from medkit_replay.model import (
+    NS_PER_SEC,
     ClearRecord,
     Cluster,
     FaultSnapshot,
@@ -34,6 +38,8 @@ from medkit_replay.outputs.json_report import (
     report_dict,
     transition_dict,
 )
+from medkit_replay.outputs.muting import muting_sentence
+from medkit_replay.text import severity_name
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -82,19 +88,66 @@ RECORDING_COLUMNS = [
     "path",
 ]
 """The recordings table: one row per black-box recording (its per-topic counts are in the JSON)."""
+TIME_COLUMNS = frozenset(
+    {
+        "t_ns",
+        "first_occurred_ns",
+        "last_occurred_ns",
+        "last_passed_ns",
+        "first_at_ns",
+        "last_at_ns",
+        "message_t_ns",
+        "start_ns",
+        "end_ns",
+        "deleted_ns",
+    }
+)
+"""Bag-time columns (exact nanoseconds); each gets a seconds-from-start column beside it."""
+SEVERITY_NAME = "severity_name"
+"""The column beside ``severity`` naming it (INFO, WARN, ERROR, CRITICAL)."""
+MUTING = "muting"
+"""The muted-faults column saying which FaultEvents were withheld and published (muting.py)."""
+
+
+def seconds_column(column: str) -> str:
+    """The seconds-from-start column beside a time column: ``t_ns`` -> ``t_s``."""
+    return column.removesuffix("_ns") + "_s"
+
+
+SECONDS_COLUMNS = frozenset(seconds_column(c) for c in TIME_COLUMNS)
+"""Seconds since the recording's start (float), for people; the ``_ns`` column stays exact.
+Empty where the time is: ``last_passed_ns`` 0 (never passed)."""
+
+
+def _for_people(columns: list[str]) -> list[str]:
+    out: list[str] = []
+    for column in columns:
+        out.append(column)
+        if column in TIME_COLUMNS:
+            out.append(seconds_column(column))
+        elif column == "severity":
+            out.append(SEVERITY_NAME)
+    return out
+
+
 TABLE_COLUMNS: dict[str, list[str]] = {
-    "faults": _columns(FaultSnapshot),
-    "events": EVENT_COLUMNS,
-    "transitions": _columns(Transition),
-    "reports": _columns(ReportRecord),
-    "clears": _columns(ClearRecord),
-    "muted_faults": _columns(MutedFault),
-    "clusters": _columns(Cluster),
-    "near_misses": _columns(NearMiss),
-    "snapshots": SNAPSHOT_COLUMNS,
-    "recordings": RECORDING_COLUMNS,
+    name: _for_people(columns)
+    for name, columns in {
+        "faults": _columns(FaultSnapshot),
+        "events": EVENT_COLUMNS,
+        "transitions": _columns(Transition),
+        "reports": _columns(ReportRecord),
+        "clears": _columns(ClearRecord),
+        "muted_faults": [*_columns(MutedFault), MUTING],
+        "clusters": _columns(Cluster),
+        "near_misses": _columns(NearMiss),
+        "snapshots": SNAPSHOT_COLUMNS,
+        "recordings": RECORDING_COLUMNS,
+    }.items()
 }
-"""Every table's columns: the record's fields in declaration order, as the JSON report has them."""
+"""Every table's columns: the record's fields in declaration order, as the JSON report has them,
+each time column followed by its seconds from the recording's start, ``severity`` by its name,
+and the muted faults by what muting withheld and published."""
 
 
 def _event_row(event: dict[str, object]) -> dict[str, object]:
@@ -150,13 +203,48 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
         "transitions": [transition_dict(t) for t in result.transitions],
         "reports": [report_dict(r) for r in result.reports],
         "clears": [clear_dict(c) for c in result.clears],
-        "muted_faults": [muted_dict(m) for m in result.muted_faults],
+        "muted_faults": [
+            {**muted_dict(m), MUTING: muting_sentence(result, m)} for m in result.muted_faults
+        ],
         "clusters": [cluster_dict(c) for c in result.clusters],
         "near_misses": [near_miss_dict(n) for n in result.near_misses],
         "snapshots": _snapshot_rows(result),
         "recordings": [_recording_row(recording_dict(r)) for r in result.recordings],
     }
-    return {name: _frame(rows[name], columns) for name, columns in TABLE_COLUMNS.items()}
+    start = result.span()[0] or 0
+    frames = {}
+    for name, columns in TABLE_COLUMNS.items():
+        base = [c for c in columns if c not in SECONDS_COLUMNS and c != SEVERITY_NAME]
+        frame = _frame(rows[name], base)
+        for column in base:
+            if column in TIME_COLUMNS:
+                frame[seconds_column(column)] = _seconds(frame[column], start, column)
+            elif column == "severity":
+                frame[SEVERITY_NAME] = frame[column].map(_severity_name).astype(object)
+        frames[name] = frame[columns]
+    return frames
+
+
+def _seconds(times: pd.Series, start_ns: int, column: str) -> pd.Series:
+    """Seconds from the start of a time column (vectorised when it is int64); empty where the
+    time is, and where ``last_passed_ns`` is 0 (upstream's "never passed")."""
+    never = column == "last_passed_ns"
+    if times.dtype == "int64":
+        shown = ((times - start_ns) / NS_PER_SEC).round(9)
+        return shown.where(times != 0) if never else shown
+    return times.map(
+        lambda v: (
+            round((v - start_ns) / NS_PER_SEC, 9)
+            if isinstance(v, int) and not (never and v == 0)
+            else None
+        )
+    ).astype("float64")
+
+
+def _severity_name(value: object) -> str | None:
+    if isinstance(value, Integral) and not isinstance(value, bool):
+        return severity_name(int(value))
+    return None
 
 
 def _frame(rows: list[dict[str, object]], columns: list[str]) -> pd.DataFrame:

@@ -70,6 +70,7 @@ def replay(
     trace: FaultTrace | None = None,
     follow: Follow | None = None,
     live: Callable[[Transition | FaultEvent], None] | None = None,
+    live_start: Callable[[int], None] | None = None,
     evidence: EvidenceOptions | None = None,
     spill_listener: SpillListener | None = None,
 ) -> Result:
@@ -94,6 +95,8 @@ def replay(
             first, a finished recording is replayed once more as it stands (said in
             ``follow.notes``), so the result is always that of the finished recording.
         live: called with every transition and FaultEvent as the manager records it.
+        live_start: called before the first of them with the recording's start (the first
+            message read, as ``summary.start_ns``), which people's times count from.
         evidence: the node graph and where to write black-box recordings (freeze frames
             and recordings are listed in the result whatever it says).
         spill_listener: told of every chunk of events, transitions, reports and clears
@@ -125,11 +128,13 @@ def replay(
     manager = FaultManager(manager_config, output)
     # Rows straight into the spools' tails; the loop settles them now and then.
     event_sink, transition_sink = events.row_sink(), transitions.row_sink()
+    timeline = Timeline(manager)
     if live is not None:
+        if live_start is not None:
+            live = _started(live, live_start, timeline)
         event_sink = _tee(event_sink, EVENT_ROWS.decode, live)
         transition_sink = _tee(transition_sink, TRANSITION_ROWS.decode, live)
     manager.set_row_sinks(reports.row_sink(), event_sink, transition_sink)
-    timeline = Timeline(manager)
     router = Router(options)
     tracer = None
     if trace is not None:  # explain's hooks, loaded only for it
@@ -248,6 +253,24 @@ def replay(
         fetched=fetched,
         losses=run.losses,
     )
+
+
+def _started(
+    live: Callable[[Transition | FaultEvent], None],
+    live_start: Callable[[int], None],
+    timeline: Timeline,
+) -> Callable[[Transition | FaultEvent], None]:
+    """``live``, told the timeline's start once, before the first record after it is known."""
+    told = False
+
+    def show(record: Transition | FaultEvent) -> None:
+        nonlocal told
+        if not told and timeline.t0_ns is not None:
+            told = True
+            live_start(timeline.t0_ns)
+        live(record)
+
+    return show
 
 
 def _tee(

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -19,6 +20,7 @@ import pytest
 
 import medkit_replay
 from medkit_replay.cli import main
+from medkit_replay.outputs.times import start_text
 from medkit_replay.pipeline import replay
 
 PACKAGE_ROOT = Path(medkit_replay.__file__).resolve().parents[1]
@@ -69,14 +71,21 @@ def follow_and_compare(tmp_path: Path, recording: Path, writer_args: list[str]) 
     follower = start_follow(recording, "--json", str(followed), "--poll", "0.05")
     assert first_line(follower.stderr).startswith(f"waiting for {recording} to appear")
     writer = start_writer(recording, *writer_args)
+    header = first_line(follower.stdout)
     line = first_line(follower.stdout)
     assert writer.poll() is None, "the first line came only after the writer had finished"
     assert " -> " in line or " event " in line
+    assert re.match(r"\d+\.\d{3} s \d\d:\d\d:\d\d\.\d{3}  ", line), line  # s from start, UTC
     rest, err = finish(follower)
     _, writer_err = finish(writer)
     assert "locked" not in writer_err.lower()
     assert "the recording is finished" in err
-    assert followed.read_bytes() == analyze_json(recording, tmp_path / "analyzed.json")
+    analyzed = analyze_json(recording, tmp_path / "analyzed.json")
+    assert followed.read_bytes() == analyzed
+    start_ns = json.loads(analyzed)["summary"]["start_ns"]
+    assert header == f"recording starts {start_text(start_ns)}: times are s from the start; " + (
+        "then the time of day, UTC\n"
+    )
     return line + rest
 
 

@@ -1,9 +1,10 @@
-"""The lines follow prints: bag time, code, from -> to, cause, source; recorded text escaped."""
+"""The lines follow prints: s from the start and the time of day, code, from -> to, cause, source;
+recorded text escaped."""
 
 from __future__ import annotations
 
 from medkit_replay.model import FaultEvent, FaultSnapshot, Transition
-from medkit_replay.outputs.live import bag_time, live_line
+from medkit_replay.outputs.live import bag_time, live_line, start_line
 
 T0_NS = 1_773_480_413_047_999_250  # 2026-03-14 09:26:53.047 UTC
 
@@ -17,10 +18,11 @@ def test_a_transition_line() -> None:
             to_status="CONFIRMED",
             cause="report",
             source_id="/powertrain/motor",
-        )
+        ),
+        T0_NS - 12_500_000_000,
     )
     assert line == (
-        "2026-03-14 09:26:53.047  MOTOR_OVERHEAT  PREFAILED -> CONFIRMED  "
+        "12.500 s 09:26:53.047  MOTOR_OVERHEAT  PREFAILED -> CONFIRMED  "
         "(report, source /powertrain/motor)"
     )
 
@@ -55,12 +57,22 @@ def test_an_event_line() -> None:
         root_cause_code=None,
         cluster_ids=(),
     )
-    line = live_line(FaultEvent(t_ns=T0_NS, event_type="fault_confirmed", fault=fault))
+    line = live_line(FaultEvent(t_ns=T0_NS, event_type="fault_confirmed", fault=fault), T0_NS)
     assert line == (
-        "2026-03-14 09:26:53.047  BATTERY_LOW  event fault_confirmed "
+        "0.000 s 09:26:53.047  BATTERY_LOW  event fault_confirmed "
         "(status CONFIRMED, sources /a, /b, /c +1)"
     )
 
 
 def test_bag_times_that_are_not_dates() -> None:
-    assert bag_time(12_345_000_000) == "t=12.345"
+    assert bag_time(12_345_000_000, 2_000_000_000) == "10.345 s"
+    assert bag_time(12_345_000_000, None) == "t=12.345"
+
+
+def test_the_start_header_and_a_line_before_the_start_is_known() -> None:
+    assert start_line(T0_NS) == (
+        "recording starts 2026-03-14 09:26:53.047 UTC: times are s from the start; "
+        "then the time of day, UTC"
+    )
+    assert start_line(0) == "recording starts t = 0.000 s: times are s from the start"
+    assert bag_time(T0_NS, None) == "09:26:53.047"

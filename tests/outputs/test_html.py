@@ -205,7 +205,8 @@ def test_near_misses_are_embedded_per_fault(tmp_path: Path) -> None:
 def test_correlation_is_explained(mission_page: str) -> None:
     page = Page(mission_page)
     assert "estop_cascade \u2014 E-stop stops everything" in mission_page
-    assert "a symptom of root cause ESTOP_PRESSED, 100 ms after it (window 3000 ms)" in mission_page
+    assert "a symptom of root cause ESTOP_PRESSED (window 3000 ms). FaultEvents: " in mission_page
+    assert "last muted 100 ms after its root ESTOP_PRESSED" in mission_page
     (cluster,) = page.with_class("cluster")
     assert cluster == {"class": "cluster"}
     assert "sensor_storm_1" in mission_page and "0.000 s \u2013 0.400 s (0.400 s)" in mission_page

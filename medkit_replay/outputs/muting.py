@@ -1,0 +1,72 @@
+"""What muting did to one fault, in words: which of its FaultEvents were withheld, which published.
+
+Counted from the Result's own reports and events, so every output that explains muting (HTML,
+``explain``, tables) says the same thing and never more than what the replay published.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from medkit_replay.model import EVENT_KINDS
+
+if TYPE_CHECKING:
+    from medkit_replay.model import MutedFault
+    from medkit_replay.result import Result
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MutedEvents:
+    """One fault's FaultEvents by type: those correlation withheld and those published."""
+
+    withheld: dict[str, int]
+    published: dict[str, int]
+
+
+def muted_events(result: Result, fault_code: str) -> MutedEvents:
+    """Counts, by event type in upstream's order, of one fault's withheld and published events."""
+    withheld: dict[str, int] = {}
+    for report in result.reports:
+        if report.fault_code == fault_code and report.withheld_event is not None:
+            withheld[report.withheld_event] = withheld.get(report.withheld_event, 0) + 1
+    published: dict[str, int] = {}
+    for event in result.events:
+        if event.fault.fault_code == fault_code:
+            published[event.event_type] = published.get(event.event_type, 0) + 1
+    order: dict[str, int] = {kind: i for i, kind in enumerate(EVENT_KINDS)}
+
+    def ordered(counts: dict[str, int]) -> dict[str, int]:
+        return dict(sorted(counts.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0])))
+
+    return MutedEvents(withheld=ordered(withheld), published=ordered(published))
+
+
+def _listed(counts: dict[str, int]) -> str:
+    return ", ".join(f"{n:,} {kind}" for kind, n in counts.items())
+
+
+def events_words(events: MutedEvents) -> str:
+    """``withheld 2 fault_confirmed; published 3 fault_updated, 1 fault_cleared`` (or 'none')."""
+    withheld = f"withheld {_listed(events.withheld)}" if events.withheld else "no event withheld"
+    published = f"published {_listed(events.published)}" if events.published else "none published"
+    return f"{withheld}; {published}"
+
+
+def delay_words(muted: MutedFault, first_ms: int | None = None) -> str:
+    """Upstream's ``delay_ms`` named for what it measures: the last mute, not the first (said
+    too when known, from a trace)."""
+    first = f"first muted {first_ms} ms, " if first_ms is not None else ""
+    return f"{first}last muted {muted.delay_ms} ms after its root {muted.root_cause_code}"
+
+
+def muting_sentence(result: Result, muted: MutedFault, first_ms: int | None = None) -> str:
+    """The one sentence every output uses for a muted fault: which of its events were withheld,
+    which published, and which mute the delay measures; ``first_ms``: the first mute's delay,
+    which only a trace knows (``explain``).
+
+    E.g. ``FaultEvents: withheld 1 fault_confirmed; published 3 fault_updated, 1 fault_cleared;
+    last muted 3496 ms after its root MOTOR_OVERCURRENT``.
+    """
+    words = events_words(muted_events(result, muted.fault_code))
+    return f"FaultEvents: {words}; {delay_words(muted, first_ms)}"
