@@ -212,6 +212,8 @@ def test_cli_mcap(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     status = main(["analyze", str(script), "--config", str(config), "--mcap", str(path), "--quiet"])
     assert status == 0 and capsys.readouterr() == ("", "")
     assert sum(len(v) for v in rosbags_messages(path).values()) > 0
-    status = main(["analyze", str(script), "--mcap", str(tmp_path / "no" / "such" / "x.mcap")])
+    (tmp_path / "plain").write_text("a file where a folder would be\n")
+    # A missing folder is made (as for --csv); a file in its place cannot be.
+    status = main(["analyze", str(script), "--mcap", str(tmp_path / "plain" / "x.mcap")])
     _, err = capsys.readouterr()
     assert status == 2 and err.startswith("medkit-replay: error: ") and "cannot write MCAP" in err
