@@ -20,6 +20,7 @@ from medkit_replay.text import severity_name
 from tests.inputs.builders import log
 from tests.outputs.scripts import SEC, T0, clear, report, write_script
 from tests.pipeline_support import SUCCEEDED, bag, config, goals
+from tests.test_sample_bags import readme_first_command
 
 if TYPE_CHECKING:
     from medkit_replay.result import Result
@@ -314,3 +315,19 @@ def test_severity_names_beside_rows(tmp_path: Path) -> None:
         if lines[row] == fault.fault_code and len(fault.fault_code) > 100:
             row += 1  # a code wider than its column stands above its row
         assert severity_name(fault.severity) in lines[row].split()
+
+
+def test_the_readme_shows_the_real_summary(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """README's "What you see" block is the start of what its first command prints."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### What you see") :]
+    block = section[section.index("```\n") + 4 : section.index("\n```", section.index("```\n"))]
+    shown = block.splitlines()
+    assert shown[-1] == "..."
+    monkeypatch.chdir(ROOT)
+    monkeypatch.delenv("COLUMNS", raising=False)
+    assert main(readme_first_command()) == 0
+    out, _ = capsys.readouterr()
+    assert out.splitlines()[: len(shown) - 1] == shown[:-1]
