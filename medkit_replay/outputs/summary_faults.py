@@ -227,22 +227,11 @@ def fault_lines(
         lines.append(
             free(show(fault.description), width, indent=4, style="italic dim", whole=everything)
         )
-    if fault.reporting_sources:
-        lines.append(
-            listing(
-                Text("    from ", style="dim"),
-                [show(s) for s in fault.reporting_sources],
-                width,
-                everything=everything,
-            )
-        )
-    if fault.cluster_ids:
-        lines.append(
-            listing(
-                Text("    cluster ", style="blue"),
-                [show(c) for c in fault.cluster_ids],
-                width,
-                everything=everything,
-            )
-        )
+    for head, style, items in (
+        ("    from ", "dim", fault.reporting_sources),
+        ("    cluster ", "blue", fault.cluster_ids),
+    ):
+        if items:
+            shown = [show(item) for item in items]
+            lines.append(listing(Text(head, style=style), shown, width, everything=everything))
     return lines + muting_lines(fault.fault_code, facts, width)

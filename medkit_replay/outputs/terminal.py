@@ -368,10 +368,10 @@ def _warnings(warnings: list[str], width: int, everything: bool) -> list[Rendera
 
 
 def _nothing_reported(result: Result) -> Text | None:
-    """Why a replay made no report, from what each bridge took (the checks' fact)."""
+    """Why a replay whose bridges ran made no report, from what each took (the checks' fact)."""
     consumed = result.consumed
-    if consumed is None or result.summary.reports or result.summary.clears:
-        return None
+    if consumed is None or consumed.empty or result.summary.reports or result.summary.clears:
+        return None  # an empty replay is said in its warnings, with how to read what it holds
     return Text(consumed.no_report())
 
 
