@@ -290,7 +290,7 @@ def _near_misses(result: Result, facts: Facts, width: int, everything: bool) -> 
     )
 
 
-def _evidence(result: Result, origin_ns: int, everything: bool) -> Group | None:
+def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> Group | None:
     """Counts of freeze-frame captures and black-box recordings, one line per recording."""
     captures, recordings = result.snapshots, result.recordings
     if not captures and not recordings:
@@ -308,11 +308,22 @@ def _evidence(result: Result, origin_ns: int, everything: bool) -> Group | None:
         )
     lines: list[RenderableType] = [head]
     for capture in captures[:limit]:
-        line = Text(f"  {seconds_at(capture.t_ns, origin_ns)}  ")
-        line.append(_show(capture.fault_code), style="bold")
-        topics = ", ".join(_show(t.topic) for t in capture.topics) or "nothing sampled"
-        line.append(f"  capture {capture.capture_id}: {topics}")
-        lines.append(line)
+        names = [_show(t.topic) for t in capture.topics]
+        topics = [
+            piece(f" {name}{',' if number < len(names) - 1 else ''}", whole=True)
+            for number, name in enumerate(names)
+        ]
+        lines += words(
+            [
+                piece(seconds_at(capture.t_ns, origin_ns), whole=True),
+                piece(" "),
+                piece(_show(capture.fault_code), "bold", whole=True),
+                piece(f" capture {capture.capture_id}: "),
+                *(topics or [piece("nothing sampled")]),
+            ],
+            width,
+            indent=2,
+        )
     for recording in recordings[:limit]:
         line = Text(
             f"  {seconds_at(recording.start_ns, origin_ns)} to "
@@ -334,7 +345,7 @@ def _evidence(result: Result, origin_ns: int, everything: bool) -> Group | None:
     if hidden:
         lines.append(fixed(f"  +{hidden} more in the JSON report"))
     for note in result.evidence_notes:
-        lines.append(Text("  note: " + _show(note, MAX_WARNING)))
+        lines.append(free("note: " + _show(note, MAX_WARNING), width, indent=2, whole=everything))
     return Group(*lines)
 
 
@@ -400,7 +411,7 @@ def summary_renderable(result: Result, width: int = 80, *, everything: bool = Fa
         clusters = _clusters(result, start_ns, width, everything)
         if clusters:
             tail += [Text(""), *clusters]
-        evidence = _evidence(result, start_ns, everything)
+        evidence = _evidence(result, start_ns, width, everything)
         if evidence is not None:
             tail += [Text(""), evidence]
     if other:
