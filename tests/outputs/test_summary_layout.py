@@ -100,26 +100,29 @@ def many_faults(tmp_path: Path) -> Path:
     return write_script(tmp_path / "many.jsonl", lines)
 
 
-def threshold_config(tmp_path: Path) -> Path:
+def threshold_config(tmp_path: Path, unknown: int = 0) -> Path:
+    """Confirm on 3 FAILED, heal on 3 PASSED; ``unknown`` misspelt names (one warning each)."""
+    typos = "".join(f"    confirmaton_threshold_{n}: 1\n" for n in range(unknown))
     return config(
         tmp_path,
         "fault_manager:\n  ros__parameters:\n    confirmation_threshold: -3\n"
-        "    healing_enabled: true\n    healing_threshold: 3\n",
+        "    healing_enabled: true\n    healing_threshold: 3\n" + typos,
     )
 
 
 @pytest.mark.parametrize("width", [60, 80, 200])
 def test_400_faults_fit_60_lines_worst_first(tmp_path: Path, width: int) -> None:
-    result = replay([many_faults(tmp_path)], [threshold_config(tmp_path)])
-    assert len(result.faults) == 400
+    result = replay([many_faults(tmp_path)], [threshold_config(tmp_path, unknown=20)])
+    assert len(result.faults) == 400 and len(result.warnings) == 20
     text = render_summary(result, width)
     lines = text.splitlines()
-    assert len(lines) <= MAX_LINES
+    assert len(lines) <= MAX_LINES and split_tokens(text, width) == []
     shown = [line.split()[0] for line in lines if line.startswith("FAULT_")]
     more = next(line for line in lines if line.endswith("more faults"))
     assert more == f"+{400 - len(shown)} more faults"
     assert "--all prints everything" in " ".join(text.split())
     assert "--html or --json FILE" in " ".join(text.split())
+    assert "Warnings (20)" in lines and "+15 more warnings" in lines
     by_code = {f.fault_code: f for f in result.faults}
 
     def key(code: str) -> tuple[int, int]:
@@ -165,7 +168,7 @@ def test_a_six_hour_mission_fits_60_lines(tmp_path: Path, width: int) -> None:
     assert len(result.clusters) == 150
     text = render_summary(result, width)
     lines = text.splitlines()
-    assert len(lines) <= MAX_LINES
+    assert len(lines) <= MAX_LINES and split_tokens(text, width) == []
     assert "Clusters: 150" in lines
     assert "  +147 more clusters" in lines
     member = next(line for line in lines if line.startswith("    cluster "))
