@@ -38,7 +38,10 @@ ARROW = " → "
 
 
 def show(value: object, limit: int = MAX_TEXT) -> str:
-    """Recorded text made safe for one terminal line (controls escaped), cut at ``limit``."""
+    """Recorded text made safe for a terminal (medkit_replay/text.py ``printable``: line breaks
+    and tabs become spaces, control and bidirectional characters escapes such as ``\\x1b``), so
+    nothing a recording holds can move the cursor, recolour or reorder the screen; cut at
+    ``limit`` characters with an ellipsis and the count of characters left out."""
     return printable(clip(str(value), limit))
 
 

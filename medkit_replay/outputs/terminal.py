@@ -1,9 +1,11 @@
 """The human summary of a replay, drawn with rich: colour on a terminal, plain text elsewhere.
 
-Reads only the Result; the one place that prints. Every string that comes from a recording, a
-script or a config (codes, descriptions, sources, paths, warnings) is shown literally: it goes into
-``rich.text.Text`` objects or through ``rich.markup.escape``, never parsed as markup or emoji,
-with controls escaped (text.py) and cut to a few hundred characters (the reports hold all).
+Reads only the Result; the one place that prints. Laid out by hand (summary_lines.py) so that no
+code, name or number is split, and cut to MAX_LINES lines unless ``--all``. Every string that
+comes from a recording, a script or a config (codes, descriptions, sources, paths, warnings) is
+shown literally: it goes into ``rich.text.Text`` objects or through ``rich.markup.escape``, never
+parsed as markup or emoji, with controls escaped (text.py) and cut to a few hundred characters
+(the reports hold all).
 """
 
 from __future__ import annotations
@@ -29,11 +31,12 @@ from medkit_replay.outputs.summary_faults import (
     gather,
     heading,
     seconds_at,
+    show,
     worst_first,
 )
 from medkit_replay.outputs.summary_lines import fixed, free, listing, piece, words
 from medkit_replay.result import release_line
-from medkit_replay.text import WARNING_CAP, clip, printable, seconds
+from medkit_replay.text import WARNING_CAP, seconds
 
 if TYPE_CHECKING:
     from rich.console import RenderableType
@@ -46,9 +49,6 @@ MAX_CLUSTERS = 3
 """Clusters listed by default."""
 MAX_WARNINGS = 5
 """Warnings listed by default, each on one line."""
-MAX_TEXT = 256
-"""Characters of a source, a code, a cluster id shown (a valid fault code has at most 256, at
-0.7.0; 128 at 0.6.0)."""
 CUT_POINTER = "cut to fit a screen: --all prints everything; --html or --json FILE has it all"
 MAX_WARNING = WARNING_CAP
 """Characters of a warning (or a path) shown; the JSON report has it whole."""
@@ -65,18 +65,10 @@ def correlation_disabled(warning: str) -> bool:
     return _CORRELATION_OFF.search(warning) is not None
 
 
-def _show(value: object, limit: int = MAX_TEXT) -> str:
-    """Recorded text made safe for a terminal (medkit_replay/text.py ``printable``: line breaks and
-    tabs become spaces, control and bidirectional characters escapes such as ``\\x1b``), so
-    nothing a recording holds can move the cursor, recolour or reorder the screen; cut at
-    ``limit`` characters with an ellipsis and the count of characters left out."""
-    return printable(clip(str(value), limit))
-
-
 def _markup(template: str, **values: object) -> Text:
     """Our markup template with every value made safe and escaped, so recorded text stays
     literal (``[bold red]`` in a description prints as written)."""
-    escaped = {key: escape(_show(value, MAX_WARNING)) for key, value in values.items()}
+    escaped = {key: escape(show(value, MAX_WARNING)) for key, value in values.items()}
     return Text.from_markup(template.format(**escaped), emoji=False)
 
 
@@ -146,9 +138,9 @@ def _header(
         Text(release_line([result.upstream_release]), style="dim"),
     ]
     for summary in result.inputs[:3]:
-        path = _show(summary.path, MAX_WARNING)
+        path = show(summary.path, MAX_WARNING)
         lines += words(
-            [piece(path, "dim", whole=True), piece(f" ({_show(summary.storage)})", "dim")],
+            [piece(path, "dim", whole=True), piece(f" ({show(summary.storage)})", "dim")],
             width,
             indent=2,
         )
@@ -250,11 +242,11 @@ def _clusters(result: Result, origin_ns: int, width: int, everything: bool) -> l
     lines = [fixed(f"Clusters: {len(result.clusters)}", "bold")]
     shown = result.clusters if everything else result.clusters[:MAX_CLUSTERS]
     for cluster in shown:
-        representative = _show(cluster.representative_code)
+        representative = show(cluster.representative_code)
         lines += words(
             [
-                piece(_show(cluster.cluster_id), "blue", whole=True),
-                piece(f" ({_show(cluster.rule_name or cluster.rule_id)}), "),
+                piece(show(cluster.cluster_id), "blue", whole=True),
+                piece(f" ({show(cluster.rule_name or cluster.rule_id)}), "),
                 piece(seconds_at(cluster.first_at_ns, origin_ns), whole=True),
                 piece(" to "),
                 piece(seconds_at(cluster.last_at_ns, origin_ns) + ",", whole=True),
@@ -267,7 +259,7 @@ def _clusters(result: Result, origin_ns: int, width: int, everything: bool) -> l
         lines.append(
             listing(
                 Text("    "),
-                [_show(code) for code in cluster.fault_codes],
+                [show(code) for code in cluster.fault_codes],
                 width,
                 everything=everything,
             )
@@ -284,7 +276,7 @@ def _near_misses(result: Result, facts: Facts, width: int, everything: bool) -> 
     codes = sorted(facts.near_misses, key=lambda code: (-facts.near_misses[code], code))
     return listing(
         head,
-        [f"{_show(code)} ({facts.near_misses[code]})" for code in codes],
+        [f"{show(code)} ({facts.near_misses[code]})" for code in codes],
         width,
         everything=everything,
     )
@@ -308,7 +300,7 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
         )
     lines: list[RenderableType] = [head]
     for capture in captures[:limit]:
-        names = [_show(t.topic) for t in capture.topics]
+        names = [show(t.topic) for t in capture.topics]
         topics = [
             piece(f" {name}{',' if number < len(names) - 1 else ''}", whole=True)
             for number, name in enumerate(names)
@@ -317,7 +309,7 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
             [
                 piece(seconds_at(capture.t_ns, origin_ns), whole=True),
                 piece(" "),
-                piece(_show(capture.fault_code), "bold", whole=True),
+                piece(show(capture.fault_code), "bold", whole=True),
                 piece(f" capture {capture.capture_id}: "),
                 *(topics or [piece("nothing sampled")]),
             ],
@@ -329,7 +321,7 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
             f"  {seconds_at(recording.start_ns, origin_ns)} to "
             f"{seconds_at(recording.end_ns, origin_ns)}  "
         )
-        line.append(_show(recording.recording_id), style="bold")
+        line.append(show(recording.recording_id), style="bold")
         size = recording.bytes
         shown = f"{size} B" if size < 1000 else f"{size / 1000:.1f} kB"
         line.append(f"  {recording.messages} msg, {shown}")
@@ -339,13 +331,13 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
                 f"    deleted at {seconds_at(recording.deleted_ns or 0, origin_ns)}: ",
                 style="yellow",
             )
-            gone.append(_show(recording.deleted_reason))
+            gone.append(show(recording.deleted_reason))
             lines.append(gone)
     hidden = 0 if limit is None else max(len(captures) - limit, 0) + max(len(recordings) - limit, 0)
     if hidden:
         lines.append(fixed(f"  +{hidden} more in the JSON report"))
     for note in result.evidence_notes:
-        lines.append(free("note: " + _show(note, MAX_WARNING), width, indent=2, whole=everything))
+        lines.append(free("note: " + show(note, MAX_WARNING), width, indent=2, whole=everything))
     return Group(*lines)
 
 
@@ -357,7 +349,7 @@ def _correlation_panel(warnings: list[str]) -> Panel:
     )
     for warning in warnings:
         body.append("\n- ")
-        body.append(_show(warning, MAX_WARNING))
+        body.append(show(warning, MAX_WARNING))
     return Panel(
         body,
         title="correlation disabled",
@@ -371,7 +363,7 @@ def _warnings(warnings: list[str], width: int, everything: bool) -> list[Rendera
     shown = warnings if everything else warnings[:MAX_WARNINGS]
     lines: list[RenderableType] = [fixed(f"Warnings ({len(warnings)})", "bold yellow")]
     for warning in shown:
-        text = _show(warning, MAX_WARNING)
+        text = show(warning, MAX_WARNING)
         lines.append(free("! " + text, width, indent=0, whole=everything))
     if len(warnings) > len(shown):
         lines.append(fixed(f"+{len(warnings) - len(shown)} more warnings"))
