@@ -74,6 +74,10 @@ _FED = ("diagnostic_bridge", "action_status_bridge", "log_bridge", "script")
 """Paths into the fault manager fed by messages (recorded calls count by call, not message)."""
 
 
+_LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
+"""rcl_interfaces/msg/Log levels by number."""
+
+
 def _count(number: int, word: str) -> str:
     return f"{number:,} {word}" + ("" if number == 1 else "s")
 
@@ -113,6 +117,7 @@ class Consumption:
             which cannot be replayed.
         unread: topics a path would read if configured so (origin: that path): log messages
             while the log bridge is off, DiagnosticArrays on another topic than the bridge's.
+        log_floor: the lowest log level the log bridge reports.
     """
 
     messages_read: int
@@ -125,6 +130,8 @@ class Consumption:
     clear_calls: int = 0
     metadata_only: int = 0
     unread: tuple[TopicUse, ...] = ()
+    log_floor: int = 30
+    """The lowest log level the log bridge reports (``log_bridge.severity_floor``; WARN)."""
 
     def topics(self, origin: str) -> tuple[TopicUse, ...]:
         """What one path took, by topic."""
@@ -199,6 +206,34 @@ class Consumption:
                 "no fault)"
             )
         return lines
+
+    def no_report(self) -> str:
+        """Why a replay made no report, on one line: what each path that ran saw (a bridge
+        that took messages and reported nothing saw nothing it reports)."""
+        if self.empty:
+            return self.nothing_replayed()
+        seen: list[str] = []
+        for origin, what, verdict in (
+            ("diagnostic_bridge", "DiagnosticArray", "none reported"),
+            ("action_status_bridge", "action status message", "no goal aborted"),
+            (
+                "log_bridge",
+                "log line",
+                f"none at {_LEVELS.get(self.log_floor, str(self.log_floor))} or above reported",
+            ),
+        ):
+            uses = self.topics(origin)
+            if not uses:
+                continue
+            count = self.messages(origin)
+            counted = _count(count, what) if count else f"{what}s"
+            on = (
+                f"on {_count(len(uses), 'server')}"
+                if origin == "action_status_bridge" and len(uses) > 1
+                else "on " + ", ".join(use.topic for use in uses)
+            )
+            seen.append(f"{counted} {on}: {verdict}")
+        return "no report: " + "; ".join(seen)
 
     def nothing_replayed(self) -> str:
         """What was missing, and how to read it, on one line (for an empty consumption)."""

@@ -74,6 +74,15 @@ _REPORT_OPTIONS = (
 )
 
 
+ALL_OPTION = click.option(
+    "--all",
+    "everything",
+    is_flag=True,
+    help="Print the whole summary (by default it is cut to some 60 lines, worst faults first).",
+)
+"""The option that prints the summary uncut (``analyze`` and ``follow``)."""
+
+
 @click.command()
 @input_argument("inputs")
 @config_option()
@@ -100,6 +109,7 @@ _REPORT_OPTIONS = (
     help="With --evidence: also write the recordings the live manager would have deleted.",
 )
 @click.option("--quiet", is_flag=True, help="No human summary, no progress bar.")
+@ALL_OPTION
 def analyze(
     inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
@@ -112,6 +122,7 @@ def analyze(
     evidence_dir: Path | None,
     evidence_all: bool,
     quiet: bool,
+    everything: bool,
 ) -> None:
     """Replay INPUT... (merged as one recording) and report what the fault manager concluded.
 
@@ -156,7 +167,9 @@ def analyze(
             )
         if ahead is not None:
             ahead.finish()
-        write_reports(result, json_out, chosen, writers, quiet=quiet, ahead=ahead)
+        write_reports(
+            result, json_out, chosen, writers, quiet=quiet, ahead=ahead, everything=everything
+        )
     if result.evidence_refused:
         from medkit_replay.evidence.folder import MARKER  # noqa: PLC0415
 
@@ -203,8 +216,10 @@ def write_reports(
     *,
     quiet: bool,
     ahead: EncodedAhead | None = None,
+    everything: bool = False,
 ) -> None:
-    """Write the JSON report and every chosen output, then the human summary (unless quiet).
+    """Write the JSON report and every chosen output, then the human summary (unless quiet;
+    uncut with ``everything``).
 
     ``ahead`` may hold batches of the report's long lists already encoded."""
     from medkit_replay.outputs.forked import Forked, Job  # noqa: PLC0415
@@ -234,7 +249,7 @@ def write_reports(
         if not quiet:  # drawn now, while the children work; printed once all is written
             from medkit_replay.outputs.terminal import summary_text  # noqa: PLC0415
 
-            text = summary_text(result, summary)
+            text = summary_text(result, summary, everything=everything)
         if json_out == "-":
             with standard_output("the report"):
                 write_report_stdout(result, ahead)

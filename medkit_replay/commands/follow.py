@@ -15,7 +15,12 @@ from typing import TYPE_CHECKING, TextIO
 import click
 
 from medkit_replay.commands import config_option
-from medkit_replay.commands.analyze import prepare_reports, report_options, write_reports
+from medkit_replay.commands.analyze import (
+    ALL_OPTION,
+    prepare_reports,
+    report_options,
+    write_reports,
+)
 from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.errors import InputError
 from medkit_replay.model import POLL_DEFAULT_S, POLL_MAX_S, POLL_MIN_S
@@ -52,6 +57,7 @@ STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
     "seconds; by default a recording that never finishes is followed until Ctrl-C.",
 )
 @click.option("--quiet", is_flag=True, help="No live lines, no human summary.")
+@ALL_OPTION
 def follow(
     recording: Path,
     configs: tuple[Path, ...],
@@ -63,6 +69,7 @@ def follow(
     poll_s: float,
     idle_timeout_s: float | None,
     quiet: bool,
+    everything: bool,
 ) -> None:
     """Replay RECORDING while it is being written, printing each status change and FaultEvent.
 
@@ -98,7 +105,7 @@ def follow(
     echo(f"medkit-replay: {ending}; writing the reports\n", sys.stderr)
     for note in control.notes:
         echo(f"medkit-replay: note: {note}\n", sys.stderr)
-    write_reports(result, json_out, chosen, writers, quiet=quiet)
+    write_reports(result, json_out, chosen, writers, quiet=quiet, everything=everything)
 
 
 def _replay_following(

@@ -16,9 +16,9 @@ if TYPE_CHECKING:
 
 DEFAULT_WIDTH = 80
 """Columns used when the detected width is unusable (``COLUMNS=0``)."""
-WIDTH_RANGE = (72, 1000)
-"""Narrowest and widest layouts (``COLUMNS=1`` would print a letter per line; the summary's
-faults table needs some 72 columns to show every column)."""
+WIDTH_RANGE = (60, 1000)
+"""Narrowest and widest layouts (``COLUMNS=1`` would print a letter per line; the summary is
+laid out for 60 columns and more)."""
 
 
 def usable_width(detected: int) -> int:
@@ -98,15 +98,16 @@ def strip_trailing(text: str) -> str:
     return "\n".join(line.rstrip(" ") for line in text.split("\n"))
 
 
-def draw(console: Console, renderable: RenderableType) -> None:
-    """Print on a terminal as rich does; elsewhere the same text without padding spaces."""
+def draw(console: Console, renderable: RenderableType, *, crop: bool = True) -> None:
+    """Print on a terminal as rich does; elsewhere the same text without padding spaces.
+    ``crop=False`` keeps a line wider than the console whole (a long code on its own line)."""
     if console.is_terminal:
-        console.print(renderable)
+        console.print(renderable, crop=crop)
         return
-    console.file.write(drawn(console, renderable))
+    console.file.write(drawn(console, renderable, crop=crop))
 
 
-def drawn(console: Console, renderable: RenderableType) -> str:
+def drawn(console: Console, renderable: RenderableType, *, crop: bool = True) -> str:
     """What :func:`draw` would print, as text to print later (plain unless on a terminal).
 
     Laid out by a twin of ``console`` on a string (same width, terminal or not, colours): rich
@@ -114,7 +115,7 @@ def drawn(console: Console, renderable: RenderableType) -> str:
     """
     twin = literal_console(io.StringIO(), width=console.width, force_terminal=console.is_terminal)
     with twin.capture() as capture:
-        twin.print(renderable)
+        twin.print(renderable, crop=crop)
     text = capture.get()
     return text if console.is_terminal else strip_trailing(text)
 

@@ -75,6 +75,7 @@ def consumption(
         clear_calls=calls.get("clear", 0),
         metadata_only=sum(router.services.metadata_only.values()),
         unread=_unread(router, summaries, rosout),
+        log_floor=router.log.config.severity_floor if router.log is not None else 30,
     )
 
 

@@ -61,15 +61,18 @@ def test_plain_summary_fits_80_columns_and_says_what_happened(result: Result) ->
     text = render_summary(result)
     assert ANSI.search(text) is None and "\x1b" not in text
     lines = text.splitlines()
-    assert max(len(line) for line in lines) <= 80
+    # Only a word wider than the line (here the script's path under tmp_path) is wider.
+    assert all(len(line) <= 80 or len(line.split()) == 1 for line in lines)
     assert all(line == line.rstrip() for line in lines)  # no padding left for logs
     assert "recording: 40.000 s of bag time from 2023-11-14 22:13:20.000 UTC" in text
     assert "faults: 3 - CONFIRMED 1, HEALED 1, CLEARED 1" in text
     assert "9 reports (1 rejected), 1 clear" in text
-    row = next(line for line in lines if line.startswith("MOTOR_OVERHEAT"))
-    assert row.split() == ["MOTOR_OVERHEAT", "CONFIRMED", "CRITICAL", "0.000", "0.000", "1"]
-    row = next(line for line in lines if line.startswith("BATTERY_LOW"))
-    assert row.split() == ["BATTERY_LOW", "CLEARED", "WARN", "6.000", "7.000", "1"]
+    row = lines.index(next(line for line in lines if line.startswith("MOTOR_OVERHEAT")))
+    assert lines[row].split() == ["MOTOR_OVERHEAT", "CONFIRMED", "CRITICAL", "1"]
+    assert lines[row + 1] == "  confirmed 0.000 s"
+    row = lines.index(next(line for line in lines if line.startswith("BATTERY_LOW")))
+    assert lines[row].split() == ["BATTERY_LOW", "CLEARED", "WARN", "1"]
+    assert lines[row + 1] == "  confirmed 6.000 s → cleared 20.000 s"
     assert "LIDAR_DROPOUT" in text and "HEALED" in text
     assert "from /power/bms, /power/bms2" in text
     assert "  85 C" in text  # the description, under its code
@@ -84,12 +87,10 @@ def test_rich_console_at_80_columns(result: Result, terminal: bool) -> None:
     assert "MOTOR_OVERHEAT" in plain and "CRITICAL" in plain
 
 
-def test_wide_terminal_gives_sources_and_muting_their_own_columns(result: Result) -> None:
+def test_wide_terminal_sizes_columns_to_their_content(result: Result) -> None:
     text = render_summary(result, width=140)
     header = next(line for line in text.splitlines() if line.startswith("code"))
-    assert header.split()[-5:] == ["sources", "muted", "by", "/", "cluster"]
-    row = next(line for line in text.splitlines() if line.startswith("BATTERY_LOW"))
-    assert "/power/bms, /power/bms2" in row
+    assert header == "code            status     severity  occ"  # the longest code is 14
 
 
 def test_print_summary_is_plain_when_not_a_terminal(result: Result) -> None:
@@ -185,21 +186,22 @@ def test_other_warnings_are_listed_literally(tmp_path: Path) -> None:
     assert text.index("Warnings (1)") > text.index("MOTOR_OVERHEAT")  # after the table
 
 
-def test_long_recordings_use_hours_minutes_seconds(tmp_path: Path) -> None:
+def test_long_recordings_keep_seconds_from_the_start(tmp_path: Path) -> None:
     script = write_script(
         tmp_path / "long.jsonl",
         [report(T0, "A"), report(T0 + 3725 * SEC, "B")],
     )
     text = render_summary(replay([script]))
     assert "recording: 1 h 02 min 05.000 s of bag time" in text
-    row = next(line for line in text.splitlines() if line.startswith("B "))
-    assert "1:02:05.000" in row
+    lines = text.splitlines()
+    row = lines.index(next(line for line in lines if line.startswith("B ")))
+    assert lines[row + 1] == "  confirmed 3725.000 s"  # one format: seconds from the start
 
 
 def test_empty_replay_summary(tmp_path: Path) -> None:
     script = write_script(tmp_path / "e.jsonl", [report(T0, "bad code!")])
     text = render_summary(replay([script]))
-    assert "no fault confirmed, healed or cleared" in text
+    assert "no fault reported" in text
     assert "1 report (1 rejected), 0 clears" in text
 
 
@@ -222,4 +224,4 @@ def test_summary_on_stdout_by_default(tmp_path: Path, capsys: pytest.CaptureFixt
     out, err = capsys.readouterr()
     assert err == ""
     assert "\x1b" not in out
-    assert max(len(line) for line in out.splitlines()) <= 80
+    assert all(len(line) <= 80 or len(line.split()) == 1 for line in out.splitlines())
