@@ -41,14 +41,19 @@ def _terminal(out: str) -> dict[str, object]:
         r"events published: ([\d,]+) confirmed, ([\d,]+) updated, ([\d,]+) cleared", out
     )
     span = re.search(r"recording: ([\d,.]+) s of bag time", out)
-    near = re.search(r"near misses: ([\d,]+) for ([\d,]+) fault", out)
+    near_line = re.search(r"near misses: ([\d,]+), for (.*)", out)
+    near = None
+    if near_line:  # "7, for WIFI_SIGNAL_STRENGTH (7), ... +N more": the faults named or counted
+        named = re.findall(r"\S+ \(\d+\)", near_line[2])
+        more = re.search(r"\+(\d+) more", near_line[2])
+        near = (near_line[1], str(len(named) + (int(more[1]) if more else 0)))
     faults = re.search(r"faults: ([\d,]+)\b(.*)", out)
     assert events and span and near and faults, out
     by_status = {status: _number(n) for status, n in re.findall(r"\b([A-Z]+) ([\d,]+)", faults[2])}
     return {
         "events": tuple(_number(n) for n in events.groups()),
         "span": span[1],
-        "near": (_number(near[1]), _number(near[2])),
+        "near": (_number(near[0]), _number(near[1])),
         "faults": _number(faults[1]),
         "by_status": {k: v for k, v in by_status.items() if k in STATUSES and v},
     }
