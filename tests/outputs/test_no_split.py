@@ -1,0 +1,116 @@
+"""No code, file name or number is split across lines, at any width from 60 columns up.
+
+fleet, sweep, check and diff are rendered with long paths and long codes (up to 256
+characters) at 60, 80 and 120 columns: every such token must appear whole on one line.
+"""
+
+from __future__ import annotations
+
+import pytest
+from rich.console import Group
+
+from medkit_replay.fleet.run import RunSummary
+from medkit_replay.fleet.terminal import render_summary as fleet_summary
+from medkit_replay.outputs.console import plain_text
+from medkit_replay.result import STATUSES
+from medkit_replay.tuning.metrics import RunRow
+from medkit_replay.tuning.ranking import VariantTotal
+from medkit_replay.tuning.terminal import summary_renderables as sweep_renderables
+
+WIDTHS = (60, 80, 120)
+SEC = 1_000_000_000
+LONG_CODE = "ACTION_FOLLOW_PATH_ABORTED_" + "X" * (256 - 27)
+MIDDLE_CODE = "ACTION_FOLLOW_PATH_ABORTED_WHILE_NAVIGATING"
+LONG_PATH = "/tmp/pytest-of-someone/pytest-42/recordings0/unrelated/" + "deep/" * 8 + "bag"
+BAG = "fleet/nav2_mission_ros1.bag"
+
+
+def whole(text: str, tokens: list[str]) -> None:
+    """Each token is on one line of ``text``."""
+    lines = text.splitlines()
+    for token in tokens:
+        assert any(token in line for line in lines), (token, text)
+
+
+def statuses(**counts: int) -> tuple[tuple[str, int], ...]:
+    return tuple((s, counts.get(s.lower(), 0)) for s in STATUSES)
+
+
+def fleet_runs() -> list[RunSummary]:
+    return [
+        RunSummary(
+            path=LONG_PATH,
+            kind="rosbag2",
+            start_ns=0,
+            end_ns=1234567 * SEC,
+            messages=123456789,
+            faults_by_status=statuses(confirmed=1, healed=1),
+            confirmed=((LONG_CODE, SEC), (MIDDLE_CODE, 2 * SEC)),
+            heals=((MIDDLE_CODE, 3 * SEC),),
+            warnings=1,
+            first_warnings=(f"{LONG_PATH}: topic {LONG_CODE} has no bridge",),
+            budget="fail",
+            budget_failures=(f"no {MIDDLE_CODE}",),
+        ),
+        RunSummary(
+            path=BAG,
+            kind="rosbag1",
+            start_ns=0,
+            end_ns=5 * SEC,
+            messages=2,
+            faults_by_status=statuses(confirmed=1),
+            confirmed=((MIDDLE_CODE, 5 * SEC),),
+            budget="pass",
+        ),
+        RunSummary(path=f"{LONG_PATH}2", kind="mcap", error=f"{LONG_PATH}2: cannot be read"),
+    ]
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_fleet(width: int) -> None:
+    text = fleet_summary(fleet_runs(), None, width=width)
+    whole(
+        text,
+        [LONG_PATH, BAG, LONG_CODE, MIDDLE_CODE, "123,456,789", "1,234,567.0", f"{LONG_PATH}2"],
+    )
+    long_lines = [line for line in text.splitlines() if len(line) > width]
+    assert all(LONG_CODE in line or LONG_PATH in line for line in long_lines), (
+        long_lines
+    )  # only a token wider than the line is
+
+
+def sweep_text(width: int) -> str:
+    totals = [
+        VariantTotal(
+            rank=rank,
+            variant=f"v{rank:02d}",
+            label=f"correlation.config_file=/very/long/{LONG_PATH}/suggested_correlation.yaml "
+            f"healing_threshold={rank}",
+            upstream_release="0.7.0",
+            runs=12,
+            failed_runs=0,
+            faults_confirmed=123456789,
+            latency_mean_ns=1234 * SEC,
+            flaps=12,
+            confirmed_ns=0,
+            events=328,
+            muted_events=68,
+            near_misses=178,
+            muted_faults=0,
+            budget_failed=rank,
+        )
+        for rank in (1, 2)
+    ]
+    failed = [RunRow(variant="v01", input=LONG_PATH, error=f"{LONG_PATH}: {LONG_CODE}")]
+    over = [(LONG_PATH, f"no {MIDDLE_CODE}", 2)]
+    parts = sweep_renderables(totals, 12, failed, None, budget=True, over_budget=over)
+    return plain_text(Group(*parts), width, crop=False)
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_sweep(width: int) -> None:
+    text = sweep_text(width)
+    tokens = ["suggested_correlation.yaml", "123,456,789", "1,234.00", LONG_PATH, LONG_CODE]
+    whole(text, [*tokens, MIDDLE_CODE, "healing_threshold=2", "v01", "v02"])
+    # every variant's figures are on one line with it
+    assert any(line.startswith("1  v01") and "123,456,789" in line for line in text.splitlines())
