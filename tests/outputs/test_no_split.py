@@ -9,6 +9,10 @@ from __future__ import annotations
 import pytest
 from rich.console import Group
 
+from medkit_replay.checks.budget_file import parse_budget
+from medkit_replay.checks.evaluate import CheckRun, Verdict
+from medkit_replay.checks.facts import Offender
+from medkit_replay.checks.terminal import run_renderable
 from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.terminal import render_summary as fleet_summary
 from medkit_replay.outputs.console import plain_text
@@ -16,6 +20,7 @@ from medkit_replay.result import STATUSES
 from medkit_replay.tuning.metrics import RunRow
 from medkit_replay.tuning.ranking import VariantTotal
 from medkit_replay.tuning.terminal import summary_renderables as sweep_renderables
+from tests.checks.support import budget_text
 
 WIDTHS = (60, 80, 120)
 SEC = 1_000_000_000
@@ -114,3 +119,33 @@ def test_sweep(width: int) -> None:
     whole(text, [*tokens, MIDDLE_CODE, "healing_threshold=2", "v01", "v02"])
     # every variant's figures are on one line with it
     assert any(line.startswith("1  v01") and "123,456,789" in line for line in text.splitlines())
+
+
+def check_text(width: int) -> str:
+    budget = parse_budget(
+        budget_text("- name: no motor faults\n  never_confirm: ['*']\n- allow_confirm: ['*']"),
+        "budgets/ci.yaml",
+    )
+    failed = Verdict(
+        budget.rules[0],
+        False,
+        f"{MIDDLE_CODE} confirmed in {LONG_PATH}",
+        tuple(
+            Offender(code, 10, 123456 * SEC, f"seen on {LONG_PATH}")
+            for code in (LONG_CODE, MIDDLE_CODE)
+        ),
+    )
+    run = CheckRun(
+        label=LONG_PATH,
+        inputs=(LONG_PATH,),
+        budget=budget,
+        verdicts=(failed, Verdict(budget.rules[1], True, "all fine")),
+        warnings=(f"topic {LONG_CODE} in {LONG_PATH} has no bridge",),
+    )
+    return plain_text(Group(*run_renderable(run)), width, crop=False)
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_check(width: int) -> None:
+    text = check_text(width)
+    whole(text, [LONG_PATH, LONG_CODE, MIDDLE_CODE, "123456.000", "ci.yaml:"])
