@@ -13,6 +13,7 @@ from medkit_replay.checks.budget_file import parse_budget
 from medkit_replay.checks.evaluate import CheckRun, Verdict
 from medkit_replay.checks.facts import Offender
 from medkit_replay.checks.terminal import run_renderable
+from medkit_replay.diffing import diff_reports, render_diff
 from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.terminal import render_summary as fleet_summary
 from medkit_replay.outputs.console import plain_text
@@ -21,6 +22,7 @@ from medkit_replay.tuning.metrics import RunRow
 from medkit_replay.tuning.ranking import VariantTotal
 from medkit_replay.tuning.terminal import summary_renderables as sweep_renderables
 from tests.checks.support import budget_text
+from tests.diff.reports import base_report, fault
 
 WIDTHS = (60, 80, 120)
 SEC = 1_000_000_000
@@ -149,3 +151,26 @@ def check_text(width: int) -> str:
 def test_check(width: int) -> None:
     text = check_text(width)
     whole(text, [LONG_PATH, LONG_CODE, MIDDLE_CODE, "123456.000", "ci.yaml:"])
+
+
+def diff_text(width: int) -> str:
+    current = base_report()
+    current["faults"][0]["severity"] = 3
+    current["faults"][0]["reporting_sources"] = [LONG_PATH]
+    current["faults"].append(fault(LONG_CODE, reporting_sources=[LONG_PATH]))
+    current["faults"].append(fault(MIDDLE_CODE))
+    diff = diff_reports(
+        base_report(),
+        current,
+        time_tolerance_ns=0,
+        baseline_name=f"{LONG_PATH}/baseline.json",
+        current_name=f"{LONG_PATH}/current.json",
+    )
+    return render_diff(diff, width)
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_diff(width: int) -> None:
+    text = diff_text(width)
+    whole(text, [f"{LONG_PATH}/baseline.json", f"{LONG_PATH}/current.json", LONG_CODE, MIDDLE_CODE])
+    assert "CONFIRMED" in text
