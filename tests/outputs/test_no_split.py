@@ -6,9 +6,13 @@ characters) at 60, 80 and 120 columns: every such token must appear whole on one
 
 from __future__ import annotations
 
+import dataclasses
+from pathlib import Path
+
 import pytest
 from rich.console import Group
 
+from medkit_replay import replay
 from medkit_replay.checks.budget_file import parse_budget
 from medkit_replay.checks.evaluate import CheckRun, Verdict
 from medkit_replay.checks.facts import Offender
@@ -16,7 +20,9 @@ from medkit_replay.checks.terminal import run_renderable
 from medkit_replay.diffing import diff_reports, render_diff
 from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.terminal import render_summary as fleet_summary
+from medkit_replay.model import EvidenceRecording, RecordingTopic
 from medkit_replay.outputs.console import plain_text
+from medkit_replay.outputs.terminal import render_summary
 from medkit_replay.result import STATUSES
 from medkit_replay.tuning.metrics import RunRow
 from medkit_replay.tuning.ranking import VariantTotal
@@ -24,6 +30,7 @@ from medkit_replay.tuning.terminal import summary_renderables as sweep_renderabl
 from tests.checks.support import budget_text
 from tests.diff.reports import base_report, fault
 
+ROOT = Path(__file__).resolve().parents[2]
 WIDTHS = (60, 80, 120)
 SEC = 1_000_000_000
 LONG_CODE = "ACTION_FOLLOW_PATH_ABORTED_" + "X" * (256 - 27)
@@ -174,3 +181,25 @@ def test_diff(width: int) -> None:
     text = diff_text(width)
     whole(text, [f"{LONG_PATH}/baseline.json", f"{LONG_PATH}/current.json", LONG_CODE, MIDDLE_CODE])
     assert "CONFIRMED" in text
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_evidence_list(width: int) -> None:
+    base = replay([ROOT / "examples/nav2_mission.jsonl"], [ROOT / "rules/nav2/fault_manager.yaml"])
+    start = base.summary.start_ns or 0
+    recording = EvidenceRecording(
+        recording_id=LONG_CODE,
+        fault_codes=(LONG_CODE,),
+        start_ns=start,
+        end_ns=start + 5 * SEC,
+        topics=(RecordingTopic(topic="/battery", type="sensor_msgs/msg/BatteryState", messages=3),),
+        messages=123456,
+        bytes=98_765_432,
+        deleted_ns=start + 9 * SEC,
+        deleted_reason=f"auto_cleanup: {MIDDLE_CODE} was cleared, {LONG_PATH} removed",
+        path=None,
+    )
+    result = dataclasses.replace(base, recordings=(recording,))
+    text = render_summary(result, width, everything=True)
+    whole(text, [LONG_CODE, "123456 msg, 98765.4 kB", MIDDLE_CODE, LONG_PATH])
+    whole(text, ["deleted at 9.000 s:"])
