@@ -7,6 +7,7 @@ characters) at 60, 80 and 120 columns: every such token must appear whole on one
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ from medkit_replay.checks.budget_file import parse_budget
 from medkit_replay.checks.evaluate import CheckRun, Verdict
 from medkit_replay.checks.facts import Offender
 from medkit_replay.checks.terminal import run_renderable
+from medkit_replay.cli import main
 from medkit_replay.diffing import diff_reports, render_diff
 from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.terminal import render_summary as fleet_summary
@@ -203,3 +205,30 @@ def test_evidence_list(width: int) -> None:
     text = render_summary(result, width, everything=True)
     whole(text, [LONG_CODE, "123456 msg, 98765.4 kB", MIDDLE_CODE, LONG_PATH])
     whole(text, ["deleted at 9.000 s:"])
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_explain(
+    width: int,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    script = tmp_path / "run.jsonl"
+    lines = [
+        {
+            "t_ns": (n + 1) * SEC,
+            "op": "report",
+            "fault_code": LONG_CODE,
+            "event_type": "FAILED",
+            "severity": 2,
+            "description": f"seen on {LONG_PATH}",
+            "source_id": f"/robot/{MIDDLE_CODE.lower()}",
+        }
+        for n in range(3)
+    ]
+    script.write_text("".join(json.dumps(line) + "\n" for line in lines), encoding="utf-8")
+    monkeypatch.setenv("COLUMNS", str(width))
+    assert main(["explain", str(script), LONG_CODE, "--quiet"]) == 0
+    text = capsys.readouterr().out
+    whole(text, [LONG_CODE, LONG_PATH, f"/robot/{MIDDLE_CODE.lower()}"])
