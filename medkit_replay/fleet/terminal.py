@@ -1,7 +1,8 @@
 """A fleet on the terminal: the summary printed after the runs and the progress bar meanwhile.
 
 Text that comes from a recording or a path is shown literally (no rich markup, control
-characters escaped); away from a terminal the summary is plain text at 80 columns.
+characters escaped); away from a terminal the summary is plain text at 80 columns (or
+``COLUMNS``). No path, code or number is ever split (outputs/summary_lines.py).
 """
 
 from __future__ import annotations

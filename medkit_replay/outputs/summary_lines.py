@@ -1,4 +1,8 @@
-"""Lines of the terminal summary laid out by hand, so that no code, name or number is split.
+"""Lines of the terminal outputs laid out by hand, so that no code, name or number is split.
+
+One implementation for every human output: analyze's summary, fleet's and sweep's tables
+(:func:`table`, :class:`Rows`), check's verdicts, diff's rows and explain's story
+(:func:`words`, :class:`Flow`).
 
 Fixed lines never wrap (a token wider than the line stands on a line of its own, whole); free
 text (descriptions, warnings) is cut to the line with an ellipsis, or wraps under ``--all``.

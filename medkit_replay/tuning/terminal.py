@@ -1,7 +1,8 @@
 """A sweep on the terminal: the variants ranked, best first, and the inputs that failed.
 
 Labels and paths are shown literally (no rich markup, control characters escaped); away from a
-terminal the summary is plain text at 80 columns.
+terminal the summary is plain text at 80 columns (or ``COLUMNS``). No path, code or number is
+ever split (outputs/summary_lines.py).
 """
 
 from __future__ import annotations
