@@ -9,18 +9,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, TextIO
 
-from rich.console import Console, Group
-from rich.table import Table
+from rich.console import Console
 from rich.text import Text
 
 from medkit_replay.model import read_in_part
+from medkit_replay.outputs.summary_lines import Flow, Piece, fixed, flow, piece, words
 from medkit_replay.result import release_line
 from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
-    from rich.console import RenderableType
+    from rich.console import ConsoleOptions, RenderableType, RenderResult
 
     from medkit_replay.checks.evaluate import CheckRun, Verdict
 
@@ -34,57 +34,91 @@ def _plural(count: int, word: str) -> str:
     return f"{count} {word}" + ("" if count == 1 else "s")
 
 
-def _verdict_rows(grid: Table, verdict: Verdict) -> None:
-    mark = Text("PASS", style="bold green") if verdict.passed else Text("FAIL", style="bold red")
-    line = Text(printable(verdict.rule.name), style="bold")
-    line.append(": ")
-    line.append(printable(verdict.message))
-    if not verdict.offenders:
-        grid.add_row(mark, line)
-        return
-    offenders = Table.grid(padding=(0, 1))
-    offenders.add_column(no_wrap=True)
-    offenders.add_column(overflow="fold")
+Row = tuple[str, str, list[Flow]]
+"""A mark (PASS, FAIL, ERROR, !), its style, and the lines beside it."""
+
+
+def _line(pieces: list[Piece]) -> Flow:
+    return Flow(pieces)
+
+
+def _verdict_row(verdict: Verdict) -> Row:
+    mark, style = ("PASS", "bold green") if verdict.passed else ("FAIL", "bold red")
+    lines = [
+        _line(
+            [
+                piece(printable(verdict.rule.name) + ":", "bold", whole=True),
+                piece(" " + printable(verdict.message)),
+            ]
+        )
+    ]
     for offender in verdict.offenders[:MAX_OFFENDERS]:
-        offenders.add_row(Text("-"), Text(printable(offender.text()), style="red"))
+        lines.append(
+            Flow([piece("-", whole=True), piece(" " + printable(offender.text()), "red")], hang=2)
+        )
     hidden = len(verdict.offenders) - MAX_OFFENDERS
     if hidden > 0:
-        offenders.add_row(Text(""), Text(f"... and {hidden} more", style="dim"))
-    grid.add_row(mark, Group(line, offenders))
+        lines.append(Flow([piece(f"... and {hidden} more", "dim", whole=True)], indent=2))
+    return (mark, style, lines)
+
+
+class _Marked:
+    """Rows of a mark then lines beside it, every line broken at spaces only (a code, a name
+    or a number whole, on a line of its own when wider than the line)."""
+
+    def __init__(self, rows: list[Row]):
+        self.rows = rows
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        size = max((len(mark) for mark, _, _ in self.rows), default=0)
+        room = max(options.max_width - size - 1, 1)
+        for mark, style, lines in self.rows:
+            for number, said in enumerate(lines):
+                laid = words(said.pieces, room, indent=said.indent, hang=said.hang)
+                for index, text in enumerate(laid):
+                    line = Text(
+                        f"{mark:<{size}} " if number == 0 and index == 0 else " " * (size + 1)
+                    )
+                    if number == 0 and index == 0:
+                        line.stylize(style, 0, len(mark))
+                    line.append_text(text)
+                    yield fixed(line)
 
 
 def run_renderable(run: CheckRun) -> list[RenderableType]:
     """The verdicts of one run: a heading, a line per rule (or why the run was not checked:
     its recording could not be read, or nothing was replayed), the replay's warnings."""
-    head = Text("check ", style="bold")
-    head.append(printable(run.label), style="bold")
-    head.append(f" against {printable(run.budget.title)}: ")
-    grid = Table.grid(padding=(0, 1))
-    grid.add_column(no_wrap=True)
-    grid.add_column(overflow="fold")
+    head = [
+        piece("check", "bold"),
+        piece(" "),
+        piece(printable(run.label), "bold", whole=True),
+        piece(" against "),
+        piece(printable(run.budget.title) + ":", whole=True),
+        piece(" "),
+    ]
+    rows: list[Row] = []
     failed = len(run.failures)
     if run.error is not None:
         why = "nothing was replayed" if run.empty else "the recording cannot be read"
-        head.append(f"not checked, {why}", style="bold red")
-        grid.add_row(Text("ERROR", style="bold red"), Text(printable(run.error), style="red"))
+        head.append(piece(f"not checked, {why}", "bold red"))
+        rows.append(("ERROR", "bold red", [flow(printable(run.error), "red")]))
     elif failed:
-        head.append(f"{failed} of {_plural(len(run.verdicts), 'rule')} failed", style="bold red")
+        said = f"{failed} of {_plural(len(run.verdicts), 'rule')} failed"
+        head.append(piece(said, "bold red"))
     else:
-        head.append(f"all {_plural(len(run.verdicts), 'rule')} passed", style="bold green")
+        head.append(piece(f"all {_plural(len(run.verdicts), 'rule')} passed", "bold green"))
     if run.damage:
-        head.append("; read only in part (--strict)", style="bold red")
-    for verdict in run.verdicts:
-        _verdict_rows(grid, verdict)
-    for line in run.damage:
-        grid.add_row(Text("FAIL", style="bold red"), Text(printable(line), style="red"))
+        head.append(piece("; read only in part (--strict)", "bold red"))
+    rows += [_verdict_row(verdict) for verdict in run.verdicts]
+    rows += [("FAIL", "bold red", [flow(printable(line), "red")]) for line in run.damage]
     for warning in run.warnings:
         shown = printable(clip(warning, WARNING_CAP))
-        grid.add_row(Text("!", style="bold yellow"), Text(shown, style="yellow"))
+        rows.append(("!", "bold yellow", [flow(shown, "yellow")]))
     if not run.damage:
         for loss in run.losses:
             total = printable(read_in_part(loss))
-            grid.add_row(Text("!", style="bold yellow"), Text(total, style="bold yellow"))
-    return [head, grid, Text("")]
+            rows.append(("!", "bold yellow", [flow(total, "bold yellow")]))
+    return [Flow(head), _Marked(rows), Text("")]
 
 
 def conclusion(runs: Sequence[CheckRun]) -> Text:

@@ -20,6 +20,7 @@ from medkit_replay.commands import (
     config_option,
     input_argument,
     local_paths,
+    say_written,
     strict_option,
 )
 from medkit_replay.commands.streams import standard_output
@@ -131,6 +132,8 @@ def check(
             ) from None
     if github:
         _github(runs)
+    if junit_out is not None:
+        say_written([junit_out])
     if not all(run.passed for run in runs):
         ctx.exit(1)
 

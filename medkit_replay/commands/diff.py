@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import config_option, input_argument, local_paths, say_written
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import MIB, REPORT_COMPRESSIONS, open_regular
@@ -226,5 +226,7 @@ def diff(
         else:
             with standard_output("the diff"):
                 _print(result, sys.stdout, notes)
+    if json_out is not None and json_out != "-":
+        say_written([json_out], quiet=quiet)
     if not result.equal and not update:
         ctx.exit(1)

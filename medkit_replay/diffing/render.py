@@ -8,18 +8,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
-from rich import box
 from rich.console import Group
-from rich.padding import Padding
-from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.console import plain_text
+from medkit_replay.outputs.summary_lines import fixed, piece, words
 from medkit_replay.text import seconds
 
 if TYPE_CHECKING:
-    from rich.console import RenderableType
+    from rich.console import Console, ConsoleOptions, RenderableType, RenderResult
 
     from medkit_replay.diffing.compare import Difference, ReportDiff
 
@@ -145,21 +143,44 @@ def _headline(diff: ReportDiff) -> Text:
     return Text.assemble(("reports differ", "bold red"), f": {total} {noun} ({parts}; {tolerance})")
 
 
-def _rows_table(what_width: int, *, header: bool = False) -> Table:
-    """One subject's rows; every such table has the same column widths, so they align."""
-    table = Table(
-        box=box.SIMPLE_HEAD,
-        show_header=header,
-        show_edge=False,
-        pad_edge=False,
-        padding=(0, 1),
-        expand=True,
-    )
-    table.add_column("", width=1, no_wrap=True)
-    table.add_column("what", width=what_width, overflow="fold")
-    table.add_column("baseline", ratio=1, overflow="fold")
-    table.add_column("current", ratio=1, overflow="fold")
-    return table
+Row = tuple[str, str, str, str, str]
+"""A mark, its style, what differs, the baseline's side and the current's."""
+
+
+class _Rows:
+    """Rows of differences laid out by hand, every code, name and number whole: aligned columns
+    sized to their content when a row fits the line; otherwise the row's mark and what, then
+    each side on its own lines below, broken at spaces only."""
+
+    def __init__(self, rows: list[Row], what_width: int, every: list[Row], *, header: bool = False):
+        self.rows, self.what_width, self.header = rows, what_width, header
+        self.every = every  # the rows of every subject, which share the columns
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        width = options.max_width
+        what = self.what_width
+        room = max(width - (1 + 1 + what + 1 + 1), 2)
+        olds = max([len("baseline"), *(len(row[3]) for row in self.every)])
+        news = max([len("current"), *(len(row[4]) for row in self.every)])
+        old_size = min(olds, max(room - 1 - news, room // 2))
+        new_size = max(room - 1 - old_size, len("current"))
+        if self.header:
+            head = f"  {'':1} {'what':<{what}} {'baseline':<{old_size}} current"
+            yield fixed(head.rstrip(), "bold")
+        for mark, style, said, old, new in self.rows:
+            lead = Text("  ")
+            lead.append(mark, style=style)
+            lead.append(f" {said:<{what}} " if len(said) <= what else f" {said} ")
+            if len(said) <= what and len(old) <= old_size and len(new) <= new_size:
+                line = lead.copy()
+                line.append(f"{old:<{old_size}} {new}")
+                line.rstrip()
+                yield fixed(line)
+                continue
+            lead.rstrip()
+            yield fixed(lead)
+            for label, text in (("baseline: ", old), ("current:  ", new)):
+                yield from words([piece(label), piece(text)], width, indent=6, hang=16)
 
 
 def diff_renderable(diff: ReportDiff) -> Group:
@@ -179,26 +200,27 @@ def diff_renderable(diff: ReportDiff) -> Group:
         return Group(*parts)
     clock = _Clock(diff.origin_ns)
     rows = [(d, _what(d), *_cells(d, clock)) for d in diff.differences[:MAX_ROWS]]
+    every: list[Row] = [("", "", what, old, new) for _, what, old, new in rows]
     what_width = min(max(len("what"), *(len(row[1]) for row in rows)), MAX_WHAT)
     parts += [
         Text(""),
         Text(f"{LEGEND}; times in s from the baseline recording's start", style="dim"),
-        Padding(_rows_table(what_width, header=True), (0, 0, 0, 2)),
+        _Rows([], what_width, every, header=True),
     ]
     previous: tuple[str, str] | None = None
-    table = _rows_table(what_width)
+    table: list[Row] = []
     for difference, what, old, new in rows:
         subject = (difference.subject_key, difference.subject)
         if subject != previous:
             if previous is not None:
-                parts.append(Padding(table, (0, 0, 0, 2)))
-                table = _rows_table(what_width)
+                parts.append(_Rows(table, what_width, every))
+                table = []
             prefix = "cluster " if difference.subject_key == "cluster_id" else ""
-            parts.append(Text(prefix + _show(difference.subject), style="bold"))
+            parts.append(fixed(prefix + _show(difference.subject), "bold"))
             previous = subject
         mark, style = _MARKS[difference.kind.rsplit("_", 1)[1]]
-        table.add_row(Text(mark, style=style), Text(what), Text(old), Text(new))
-    parts.append(Padding(table, (0, 0, 0, 2)))
+        table.append((mark, style, what, old, new))
+    parts.append(_Rows(table, what_width, every))
     if len(diff.differences) > MAX_ROWS:
         more = len(diff.differences) - MAX_ROWS
         parts.append(Text(f"... and {more} more (the JSON output lists all)", style="dim"))

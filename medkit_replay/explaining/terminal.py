@@ -10,16 +10,16 @@ import sys
 from typing import TYPE_CHECKING, TextIO
 
 from rich.console import Group
-from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.outputs.console import draw, literal_console, plain_text
+from medkit_replay.outputs.summary_lines import Flow, Piece, fixed, piece, words
 from medkit_replay.outputs.times import EPOCH_FLOOR_NS, clock_time, start_text
 from medkit_replay.result import release_line
 from medkit_replay.text import clip, printable, seconds
 
 if TYPE_CHECKING:
-    from rich.console import RenderableType
+    from rich.console import Console, ConsoleOptions, RenderableType, RenderResult
 
     from medkit_replay.explaining.lines import Line
     from medkit_replay.explaining.story import Story
@@ -59,43 +59,80 @@ def styled(line: Line) -> Text:
     return text
 
 
+def _pieces(line: Line) -> list[Piece]:
+    """A line as pieces of :func:`words`: broken at spaces only, never inside a code."""
+    return [piece(printable(clip(value, MAX_PART)), STYLES.get(role, "")) for value, role in line]
+
+
+Entry = tuple[str, str, list[list[Piece]]]
+"""Seconds from the start, the clock time, the line then its details."""
+
+
+class _Entries:
+    """The story's lines beside their times, every code, name and number whole: a line is
+    broken at spaces only (a word wider than the line whole on a line of its own)."""
+
+    def __init__(self, entries: list[Entry]):
+        self.entries = entries
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        at = max((len(t) for t, _, _ in self.entries), default=0)
+        clock = max((len(c) for _, c, _ in self.entries), default=0)
+        lead = at + 1 + (clock + 1 if clock else 0)
+        room = max(options.max_width - lead, 20)
+        for t, c, lines in self.entries:
+            for number, pieces in enumerate(lines):
+                laid = words(pieces, room, indent=2 if number else 0)
+                for index, body in enumerate(laid):
+                    line = Text()
+                    if number == 0 and index == 0:
+                        line.append(f"{t:>{at}} ")
+                        if clock:
+                            line.append(f"{c:<{clock}}", style="dim")
+                            line.append(" ")
+                    else:
+                        line.append(" " * lead)
+                    line.append_text(body)
+                    line.rstrip()
+                    yield fixed(line)
+
+
 def story_renderable(story: Story) -> Group:
     """The whole story as one rich renderable."""
-    head = Text()
-    head.append(printable(clip(story.fault_code, MAX_PART)), style="bold")
     clock = "; clock times UTC" if story.origin_ns >= EPOCH_FLOOR_NS else ""
-    head.append(f": its story in bag time (s from the start, {start_text(story.origin_ns)}{clock})")
-    parts: list[RenderableType] = [head]
+    head = [
+        piece(printable(clip(story.fault_code, MAX_PART)) + ":", "bold", whole=True),
+        piece(f" its story in bag time (s from the start, {start_text(story.origin_ns)}{clock})"),
+    ]
+    parts: list[RenderableType] = [Flow(head)]
     for path in story.inputs:
-        parts.append(Text(f"  {printable(clip(path, MAX_PART))}", style="dim"))
+        parts.append(fixed(f"  {printable(clip(path, MAX_PART))}", "dim"))
     parts.append(Text(release_line([story.upstream_release]), style="dim"))
     if story.at_ns is not None:
         parts.append(
             Text(f"stopped at {seconds(story.at_ns - story.origin_ns)} s (--at)", style="bold")
         )
-    parts += [styled(line) for line in story.header]
-    grid = Table.grid(padding=(0, 1))
-    grid.add_column(justify="right", no_wrap=True)
-    grid.add_column(no_wrap=True, style="dim")
-    grid.add_column(overflow="fold")
-    for entry in story.entries:
-        body = styled(entry.line)
-        for detail in entry.details:
-            body.append("\n  ")
-            body.append_text(styled(detail))
-        grid.add_row(seconds(entry.t_ns - story.origin_ns), clock_time(entry.t_ns), body)
-    parts += [Text(""), grid, Text("")]
-    parts += [styled(line) for line in story.state]
+    parts += [Flow(_pieces(line)) for line in story.header]
+    entries = [
+        (
+            seconds(entry.t_ns - story.origin_ns),
+            clock_time(entry.t_ns),
+            [_pieces(entry.line), *(_pieces(detail) for detail in entry.details)],
+        )
+        for entry in story.entries
+    ]
+    parts += [Text(""), _Entries(entries), Text("")]
+    parts += [Flow(_pieces(line)) for line in story.state]
     return Group(*parts)
 
 
 def render_story(story: Story, width: int = 100) -> str:
     """The story as plain text laid out for ``width`` columns."""
-    return plain_text(story_renderable(story), width)
+    return plain_text(story_renderable(story), width, crop=False)
 
 
 def print_story(story: Story, stream: TextIO | None = None) -> None:
     """Draw the story on ``stream`` (standard output by default): colour and the terminal's
     width on a terminal, plain text otherwise (``NO_COLOR``/``FORCE_COLOR`` honoured)."""
     console = literal_console(stream or sys.stdout)
-    draw(console, story_renderable(story))
+    draw(console, story_renderable(story), crop=False)

@@ -1,23 +1,23 @@
 """A fleet on the terminal: the summary printed after the runs and the progress bar meanwhile.
 
 Text that comes from a recording or a path is shown literally (no rich markup, control
-characters escaped); away from a terminal the summary is plain text at 80 columns.
+characters escaped); away from a terminal the summary is plain text at 80 columns (or
+``COLUMNS``). No path, code or number is ever split (outputs/summary_lines.py).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, TextIO
 
-from rich import box
 from rich.console import Group
 from rich.padding import Padding
-from rich.table import Table
 from rich.text import Text
 
 from medkit_replay.fleet.progress import FleetProgress, fleet_progress
 from medkit_replay.fleet.report import FILES, is_missing
 from medkit_replay.fleet.stats import codes_table, overview
-from medkit_replay.outputs.console import literal_console, plain_text
+from medkit_replay.outputs.console import draw, literal_console, plain_text
+from medkit_replay.outputs.summary_lines import Cell, Flow, Rows, cell, piece
 from medkit_replay.releases import DEFAULT_RELEASE
 from medkit_replay.result import release_line
 from medkit_replay.text import printable
@@ -54,6 +54,12 @@ def _indented(text: Text) -> Padding:
     return Padding(text, (0, 0, 0, 2))
 
 
+def _said(path: str, text: str) -> Flow:
+    """``path: text`` under two spaces, the path whole, the text broken only at spaces."""
+    pieces = [piece(printable(path) + ":", whole=True), piece(" " + printable(text))]
+    return Flow(pieces, indent=2, hang=4)
+
+
 def summary_renderables(
     runs: Sequence[RunSummary], out_dir: Path | None, release: str = DEFAULT_RELEASE
 ) -> list[RenderableType]:
@@ -78,54 +84,44 @@ def summary_renderables(
             line.append(f"{number:,} {verdict}", style="bold red" if verdict == "fail" else "")
         parts.append(line)
 
-    title = "runs (faults CONFIRMED, HEALED, CLEARED at the end)"
-    table = Table(box=box.SIMPLE, title=title, title_justify="left", pad_edge=False)
-    table.add_column("path", min_width=16, overflow="fold")
-    for name in ("span s", "msgs", "conf", "heal", "clear"):
-        table.add_column(name, justify="right", no_wrap=True, min_width=len(name))
-    if verdicts:
-        table.add_column("budget", no_wrap=True, min_width=len("budget"))
+    heads = ["path", "span s", "msgs", "conf", "heal", "clear"] + (["budget"] if verdicts else [])
+    rows: list[list[Cell]] = []
     for run in runs[:MAX_RUN_ROWS]:
         statuses = dict(run.faults_by_status)
         span = run.span_ns
-        cells: list[Text | str] = [
-            Text(printable(str(run.path)), style="" if run.ok else "red"),
-            _seconds(span / 1e9 if span is not None else None),
-            f"{run.messages:,}" if run.messages is not None else "",
+        row = [
+            cell(printable(str(run.path)), "" if run.ok else "red"),
+            cell(_seconds(span / 1e9 if span is not None else None)),
+            cell(f"{run.messages:,}" if run.messages is not None else ""),
             *(
-                f"{statuses.get(s, 0):,}" if run.ok else ""
+                cell(f"{statuses.get(s, 0):,}" if run.ok else "")
                 for s in ("CONFIRMED", "HEALED", "CLEARED")
             ),
         ]
         if verdicts:
-            cells.append(Text(run.budget or "", style="bold red" if run.budget == "fail" else ""))
-        table.add_row(*cells)
-    parts.append(table)
+            row.append(cell(run.budget or "", "bold red" if run.budget == "fail" else ""))
+        rows.append(row)
+    title = "runs (faults CONFIRMED, HEALED, CLEARED at the end)"
+    parts.append(Rows(heads, rows, right=frozenset(range(1, 6)), title=title))
     if len(runs) > MAX_RUN_ROWS:
         parts.append(Text(f"... {len(runs) - MAX_RUN_ROWS:,} more runs in runs.csv", style="dim"))
 
     codes = codes_table(runs)
     if len(codes):
-        code_table = Table(
-            box=box.SIMPLE,
-            title="codes confirmed across runs",
-            title_justify="left",
-            pad_edge=False,
-        )
-        widest = max(len(str(code)) for code in codes["fault_code"])
-        code_table.add_column("fault code", overflow="fold", min_width=min(widest, 24))
-        for name in ("runs", "share", "heals", "mean heal", "median heal"):
-            code_table.add_column(name, justify="right", no_wrap=True, min_width=len(name))
-        for record in codes.head(MAX_CODE_ROWS).to_dict(orient="records"):
-            code_table.add_row(
-                Text(printable(str(record["fault_code"]))),
-                f"{record['runs_confirmed']:,}",
-                f"{record['share_of_runs']:.0%}",
-                f"{record['heals']:,}",
-                _seconds(record["mean_time_to_heal_s"]),
-                _seconds(record["median_time_to_heal_s"]),
-            )
-        parts.append(code_table)
+        code_rows = [
+            [
+                cell(printable(str(record["fault_code"]))),
+                cell(f"{record['runs_confirmed']:,}"),
+                cell(f"{record['share_of_runs']:.0%}"),
+                cell(f"{record['heals']:,}"),
+                cell(_seconds(record["mean_time_to_heal_s"])),
+                cell(_seconds(record["median_time_to_heal_s"])),
+            ]
+            for record in codes.head(MAX_CODE_ROWS).to_dict(orient="records")
+        ]
+        code_heads = ["fault code", "runs", "share", "heals", "mean heal", "median heal"]
+        title = "codes confirmed across runs"
+        parts.append(Rows(code_heads, code_rows, right=frozenset(range(1, 6)), title=title))
         if len(codes) > MAX_CODE_ROWS:
             more = len(codes) - MAX_CODE_ROWS
             parts.append(Text(f"... {more:,} more codes in codes.csv", style="dim"))
@@ -135,7 +131,7 @@ def summary_renderables(
         parts.append(Text("over budget:", style="bold red"))
         for run in over[:MAX_ERROR_ROWS]:
             rules = "; ".join(run.budget_failures)
-            parts.append(_indented(Text(f"{printable(str(run.path))}: {printable(str(rules))}")))
+            parts.append(_said(str(run.path), rules))
         if len(over) > MAX_ERROR_ROWS:
             more = len(over) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -145,13 +141,14 @@ def summary_renderables(
         parts.append(Text("not replayed:", style="bold red"))
         for run in failed[:MAX_ERROR_ROWS]:
             error = run.error or ""
-            shown = error if error.startswith(run.path) else f"{run.path}: {error}"
-            parts.append(_indented(Text(printable(str(shown)))))
+            shown = error.removeprefix(run.path).removeprefix(":").strip()
+            parts.append(_said(str(run.path), shown))
         if len(failed) > MAX_ERROR_ROWS:
             more = len(failed) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
     if out_dir is not None:
-        parts.append(Text(f"report: {printable(str(out_dir))}/ ({', '.join(FILES)})"))
+        report = [piece("report:"), piece(f" {printable(str(out_dir))}/", whole=True)]
+        parts.append(Flow([*report, piece(f" ({', '.join(FILES)})")]))
     return parts
 
 
@@ -166,8 +163,8 @@ def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
         for warning in run.first_warnings:
             if shown == MAX_WARNING_ROWS:
                 break
-            said = warning if warning.startswith(run.path) else f"{run.path}: {warning}"
-            parts.append(_indented(Text(printable(said))))
+            said = warning.removeprefix(run.path).removeprefix(":").strip()
+            parts.append(_said(str(run.path), said))
             shown += 1
     if total > shown:
         within = sum(1 for run in runs if run.warnings)
@@ -184,10 +181,14 @@ def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
 
 
 def render_summary(
-    runs: Sequence[RunSummary], out_dir: Path | None = None, release: str = DEFAULT_RELEASE
+    runs: Sequence[RunSummary],
+    out_dir: Path | None = None,
+    release: str = DEFAULT_RELEASE,
+    width: int = 80,
 ) -> str:
-    """The terminal summary as plain text at 80 columns (what a file or a pipe receives)."""
-    return plain_text(Group(*summary_renderables(runs, out_dir, release)), 80)
+    """The terminal summary as plain text at ``width`` columns (what a file or a pipe
+    receives: 80, or ``COLUMNS``)."""
+    return plain_text(Group(*summary_renderables(runs, out_dir, release)), width, crop=False)
 
 
 def print_summary(
@@ -198,7 +199,4 @@ def print_summary(
 ) -> None:
     """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
     console = literal_console(stream)
-    if console.is_terminal:
-        console.print(Group(*summary_renderables(runs, out_dir, release)))
-        return
-    stream.write(render_summary(runs, out_dir, release))
+    draw(console, Group(*summary_renderables(runs, out_dir, release)), crop=False)

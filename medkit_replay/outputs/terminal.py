@@ -327,12 +327,10 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
         line.append(f"  {recording.messages} msg, {shown}")
         lines.append(fixed(line))
         if recording.deleted_reason is not None:
-            gone = Text(
-                f"    deleted at {seconds_at(recording.deleted_ns or 0, origin_ns)}: ",
-                style="yellow",
-            )
-            gone.append(show(recording.deleted_reason))
-            lines.append(gone)
+            at = seconds_at(recording.deleted_ns or 0, origin_ns)
+            gone = [piece(f"deleted at {at}:", "yellow", whole=True), piece(" ")]
+            gone.append(piece(show(recording.deleted_reason)))
+            lines += words(gone, width, indent=4, hang=6)
     hidden = 0 if limit is None else max(len(captures) - limit, 0) + max(len(recordings) - limit, 0)
     if hidden:
         lines.append(fixed(f"  +{hidden} more in the JSON report"))

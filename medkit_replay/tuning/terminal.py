@@ -1,19 +1,19 @@
 """A sweep on the terminal: the variants ranked, best first, and the inputs that failed.
 
 Labels and paths are shown literally (no rich markup, control characters escaped); away from a
-terminal the summary is plain text at 80 columns.
+terminal the summary is plain text at 80 columns (or ``COLUMNS``). No path, code or number is
+ever split (outputs/summary_lines.py).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, TextIO
 
-from rich import box
 from rich.console import Group
-from rich.table import Table
 from rich.text import Text
 
-from medkit_replay.outputs.console import literal_console, plain_text
+from medkit_replay.outputs.console import draw, literal_console
+from medkit_replay.outputs.summary_lines import Cell, Flow, Rows, cell, piece
 from medkit_replay.result import release_line
 from medkit_replay.text import printable
 from medkit_replay.tuning.ranking import RANKING, same_latency
@@ -30,6 +30,12 @@ if TYPE_CHECKING:
 MAX_VARIANT_ROWS = 30
 """Variants listed on the terminal; variants.csv has all of them."""
 MAX_ERROR_ROWS = 10
+
+
+def _said(name: str, text: str) -> Flow:
+    """``name: text`` under two spaces, the name whole, the text broken only at spaces."""
+    pieces = [piece(printable(name) + ":", whole=True), piece(" " + printable(text))]
+    return Flow(pieces, indent=2, hang=4)
 
 
 def _seconds(ns: int | None) -> str:
@@ -52,39 +58,34 @@ def summary_renderables(
     head.append(f"{len(totals):,} variant(s) x {inputs:,} input(s)")
     releases = list(dict.fromkeys(total.upstream_release for total in totals))
     parts: list[RenderableType] = [head, Text(release_line(releases), style="dim")]
-    table = Table(
-        box=box.SIMPLE,
-        title="variants, best first",
-        title_justify="left",
-        pad_edge=False,
-    )
-    table.add_column("#", justify="right", no_wrap=True)
-    table.add_column("variant", overflow="fold", min_width=20, ratio=1)
     latency_note = same_latency(totals)
     names = ["conf", "flaps", "events", "muted", "near"]
     if latency_note is None:
         names.append("lat s")
     if budget:
         names.append("over")
-    for name in names:
-        table.add_column(name, justify="right", no_wrap=True)
+    rows: list[list[Cell]] = []
     for total in totals[:MAX_VARIANT_ROWS]:
-        cells: list[Text | str] = [
-            str(total.rank),
-            Text(printable(f"{total.variant} {total.label}".strip()).replace(" ", "\n")),
-            f"{total.faults_confirmed:,}",
-            f"{total.flaps:,}",
-            f"{total.events:,}",
-            f"{total.muted_events:,}",
-            f"{total.near_misses:,}",
+        row = [
+            cell(str(total.rank)),
+            cell(printable(total.variant)),
+            cell(f"{total.faults_confirmed:,}"),
+            cell(f"{total.flaps:,}"),
+            cell(f"{total.events:,}"),
+            cell(f"{total.muted_events:,}"),
+            cell(f"{total.near_misses:,}"),
         ]
         if latency_note is None:
-            cells.append(_seconds(total.latency_mean_ns))
+            row.append(cell(_seconds(total.latency_mean_ns)))
         if budget:
             over = total.budget_failed
-            cells.append(Text(f"{over:,}", style="bold red" if over else ""))
-        table.add_row(*cells)
-    parts.append(table)
+            row.append(cell(f"{over:,}", "bold red" if over else ""))
+        rows.append(row)
+    heads = ["#", "variant", *names]
+    right = frozenset(range(2, len(heads))) | {0}
+    labels = [printable(total.label) for total in totals[:MAX_VARIANT_ROWS]]
+    title = "variants, best first (each with its parameters below)"
+    parts.append(Rows(heads, rows, right=right, title=title, wide=1, below=labels))
     legend = (
         "conf: faults confirmed (summed over inputs); flaps: confirm-heal cycles; events: "
         "FaultEvents published; muted: events muted by correlation; near: near misses"
@@ -99,26 +100,23 @@ def summary_renderables(
     if over_budget:
         parts.append(Text("over budget:", style="bold red"))
         for path, why, variants in over_budget[:MAX_ERROR_ROWS]:
-            shown = f"{path}: {why} ({variants:,} variant{'' if variants == 1 else 's'})"
-            parts.append(Text("  " + printable(shown)))
+            shown = f"{why} ({variants:,} variant{'' if variants == 1 else 's'})"
+            parts.append(_said(path, shown))
         if len(over_budget) > MAX_ERROR_ROWS:
             more = len(over_budget) - MAX_ERROR_ROWS
             parts.append(Text(f"  ... {more:,} more in runs.csv"))
     if failed:
         parts.append(Text("not replayed:", style="bold red"))
-        for row in failed[:MAX_ERROR_ROWS]:
-            parts.append(Text("  " + printable(f"{row.variant}: {row.error}")))
+        for failure in failed[:MAX_ERROR_ROWS]:
+            parts.append(_said(failure.variant, str(failure.error)))
         if len(failed) > MAX_ERROR_ROWS:
             parts.append(Text(f"  ... {len(failed) - MAX_ERROR_ROWS:,} more in runs.csv"))
     if out_dir is not None:
-        parts.append(Text(f"tables: {printable(str(out_dir))}/"))
+        parts.append(Flow([piece("tables:"), piece(f" {printable(str(out_dir))}/", whole=True)]))
     return parts
 
 
 def print_summary(stream: TextIO, parts: list[RenderableType]) -> None:
-    """Draw the summary on ``stream``: rich on a terminal, plain 80-column text elsewhere."""
-    console = literal_console(stream)
-    if console.is_terminal:
-        console.print(Group(*parts))
-        return
-    stream.write(plain_text(Group(*parts), 80))
+    """Draw the summary on ``stream``: rich on a terminal, plain text elsewhere (80 columns
+    unless ``COLUMNS`` says otherwise)."""
+    draw(literal_console(stream), Group(*parts), crop=False)

@@ -143,8 +143,12 @@ def test_each_input_is_its_own_run_unless_merged(
     budget = write_budget(tmp_path, "- never_confirm: [ESTOP]\n- max_confirmed: {WARN: 2}")
     common = ["--budget", str(budget), "--config", str(NAV2)]
     junit = tmp_path / "runs.xml"
-    status, out, _ = run(["check", str(first), str(second), *common, "--junit", str(junit)], capsys)
+    status, out, err = run(
+        ["check", str(first), str(second), *common, "--junit", str(junit)], capsys
+    )
     assert status == 1
+    assert err.splitlines()[-1] == f"wrote {junit}"  # the file written, after the rest
+    assert "wrote" not in out
     assert f"check {first} against budget.yaml: 1 of 2 rules failed" in out
     assert f"check {second} against budget.yaml: all 2 rules passed" in out
     assert out.splitlines()[-1] == "budget exceeded: 1 rule verdict failed in 1 of 2 runs"

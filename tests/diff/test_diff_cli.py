@@ -60,8 +60,14 @@ def test_every_difference_kind_exits_1(tmp_path: Path, capsys: pytest.CaptureFix
     current["clusters"] = []  # removed
     a = write(tmp_path / "a.json", base_report())
     b = write(tmp_path / "b.json", current)
-    status, out, _ = run(["diff", str(a), str(b), "--json", str(tmp_path / "d.json")], capsys)
+    status, out, err = run(["diff", str(a), str(b), "--json", str(tmp_path / "d.json")], capsys)
     assert status == 1
+    assert err.splitlines() == [f"wrote {tmp_path / 'd.json'}"]  # the file written
+    status, out, err = run(
+        ["diff", str(a), str(b), "--json", str(tmp_path / "d.json"), "--quiet"], capsys
+    )
+    assert (status, out, err) == (1, "", "")  # never under --quiet
+    status, out, err = run(["diff", str(a), str(b), "--json", str(tmp_path / "d.json")], capsys)
     assert "\x1b" not in out  # plain text when not on a terminal
     document = json.loads((tmp_path / "d.json").read_text(encoding="utf-8"))
     counts = {kind: n for kind, n in document["counts"].items() if n}
