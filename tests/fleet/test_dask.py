@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
     import pytest
 
-CLUSTER = {"n_workers": 1, "dashboard_address": None, "worker_dashboard_address": None}
+CLUSTER = {"n_workers": 1, "dashboard_address": ":0", "worker_dashboard_address": None}
 
 
 def small_fleet(root: Path) -> Path:
