@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.explaining.entries import ENTRY_BUILDERS, EntryBuilder, when
 from medkit_replay.explaining.evidence import evidence_entries
 from medkit_replay.explaining.lines import Entry, Line, part
-from medkit_replay.outputs.muting import muting_sentence
+from medkit_replay.outputs.muting import NO_EVENTS, event_counts, muting_sentence
 from medkit_replay.text import severity_name
 from medkit_replay.trace import CorrelationDecision, TracedReport, TracedTransition, item_time
 
@@ -376,7 +376,10 @@ def _header(
         lines.append(
             (
                 part("muted at the end of the run: ", "muted"),
-                part(muting_sentence(result, muted, first_ms), "plain"),
+                part(
+                    muting_sentence(event_counts(result).get(code, NO_EVENTS), muted, first_ms),
+                    "plain",
+                ),
             )
         )
     if closest is not None:

@@ -37,7 +37,7 @@ from medkit_replay.outputs.html_timeline import (
     build_lanes,
     page_data,
 )
-from medkit_replay.outputs.muting import muting_sentence
+from medkit_replay.outputs.muting import NO_EVENTS, event_counts, muting_sentence
 from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
@@ -276,6 +276,7 @@ def _correlation(result: Result, span: Span) -> str:
         return short(f"{rule_id} — {name}" if name else rule_id)
 
     muted_rows = []
+    counts = event_counts(result) if result.muted_faults else {}
     for m in result.muted_faults:
         rule = rules.get(m.rule_id, {})
         mode = str(rule.get("mode", ""))
@@ -292,7 +293,7 @@ def _correlation(result: Result, span: Span) -> str:
                 text(m.root_cause_code),
                 text(rule_text(m.rule_id)),
                 (str(m.delay_ms), m.delay_ms),
-                text(f"muted as {why}. {muting_sentence(result, m)}"),
+                text(f"muted as {why}. {muting_sentence(counts.get(m.fault_code, NO_EVENTS), m)}"),
             ]
         )
     muted = table(

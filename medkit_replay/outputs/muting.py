@@ -24,22 +24,33 @@ class MutedEvents:
     published: dict[str, int]
 
 
-def muted_events(result: Result, fault_code: str) -> MutedEvents:
-    """Counts, by event type in upstream's order, of one fault's withheld and published events."""
-    withheld: dict[str, int] = {}
+NO_EVENTS = MutedEvents(withheld={}, published={})
+"""A fault none of whose events were withheld or published."""
+
+
+def event_counts(result: Result) -> dict[str, MutedEvents]:
+    """Per fault code, its withheld and published FaultEvents counted by type (upstream's
+    order), in one pass over the report's records and events."""
+    withheld: dict[str, dict[str, int]] = {}
     for report in result.reports:
-        if report.fault_code == fault_code and report.withheld_event is not None:
-            withheld[report.withheld_event] = withheld.get(report.withheld_event, 0) + 1
-    published: dict[str, int] = {}
+        if report.withheld_event is not None:
+            counts = withheld.setdefault(report.fault_code, {})
+            counts[report.withheld_event] = counts.get(report.withheld_event, 0) + 1
+    published: dict[str, dict[str, int]] = {}
     for event in result.events:
-        if event.fault.fault_code == fault_code:
-            published[event.event_type] = published.get(event.event_type, 0) + 1
+        counts = published.setdefault(event.fault.fault_code, {})
+        counts[event.event_type] = counts.get(event.event_type, 0) + 1
     order: dict[str, int] = {kind: i for i, kind in enumerate(EVENT_KINDS)}
 
     def ordered(counts: dict[str, int]) -> dict[str, int]:
         return dict(sorted(counts.items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0])))
 
-    return MutedEvents(withheld=ordered(withheld), published=ordered(published))
+    return {
+        code: MutedEvents(
+            withheld=ordered(withheld.get(code, {})), published=ordered(published.get(code, {}))
+        )
+        for code in sorted(withheld.keys() | published.keys())
+    }
 
 
 def _listed(counts: dict[str, int]) -> str:
@@ -60,13 +71,12 @@ def delay_words(muted: MutedFault, first_ms: int | None = None) -> str:
     return f"{first}last muted {muted.delay_ms} ms after its root {muted.root_cause_code}"
 
 
-def muting_sentence(result: Result, muted: MutedFault, first_ms: int | None = None) -> str:
-    """The one sentence every output uses for a muted fault: which of its events were withheld,
-    which published, and which mute the delay measures; ``first_ms``: the first mute's delay,
-    which only a trace knows (``explain``).
+def muting_sentence(events: MutedEvents, muted: MutedFault, first_ms: int | None = None) -> str:
+    """The one sentence every output uses for a muted fault: which of its ``events`` were
+    withheld, which published (from :func:`event_counts`), and which mute the delay measures;
+    ``first_ms``: the first mute's delay, which only a trace knows (``explain``).
 
     E.g. ``FaultEvents: withheld 1 fault_confirmed; published 3 fault_updated, 1 fault_cleared;
     last muted 3496 ms after its root MOTOR_OVERCURRENT``.
     """
-    words = events_words(muted_events(result, muted.fault_code))
-    return f"FaultEvents: {words}; {delay_words(muted, first_ms)}"
+    return f"FaultEvents: {events_words(events)}; {delay_words(muted, first_ms)}"

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from rich.text import Text
 
+from medkit_replay.outputs.muting import NO_EVENTS, MutedEvents, event_counts, events_words
 from medkit_replay.outputs.summary_lines import Piece, fixed, free, listing, piece, words
 from medkit_replay.text import clip, printable, seconds, severity_name
 
@@ -55,8 +56,8 @@ class Facts:
     """What the summary tells per fault, gathered in one pass over the report's records."""
 
     stories: dict[str, list[tuple[str, int]]]
-    published: dict[str, Counter[str]]
-    withheld: dict[str, Counter[str]]
+    events: dict[str, MutedEvents]
+    """Per code, its FaultEvents withheld and published (outputs.muting)."""
     near_misses: Counter[str]
     muted: dict[str, MutedFault]
 
@@ -69,17 +70,9 @@ def gather(result: Result) -> Facts:
             stories.setdefault(transition.fault_code, []).append(
                 (transition.to_status, transition.t_ns)
             )
-    published: dict[str, Counter[str]] = {}
-    for event in result.events:
-        published.setdefault(event.fault.fault_code, Counter())[event.event_type] += 1
-    withheld: dict[str, Counter[str]] = {}
-    for record in result.reports:
-        if record.withheld_event is not None:
-            withheld.setdefault(record.fault_code, Counter())[record.withheld_event] += 1
     return Facts(
         stories=stories,
-        published=published,
-        withheld=withheld,
+        events=event_counts(result),
         near_misses=Counter(n.fault_code for n in result.near_misses),
         muted={m.fault_code: m for m in result.muted_faults},
     )
@@ -124,16 +117,12 @@ def _story(told: list[str], steps: list[tuple[str, int]], shown: int) -> str:
     return f"{line}{ARROW}+{len(told) - shown} more ({left})"
 
 
-def _events(counts: Counter[str]) -> str:
-    return ", ".join(f"{n} {kind}" for kind, n in sorted(counts.items()))
-
-
 def muting_lines(code: str, facts: Facts, width: int) -> list[Text]:
     """What correlation muting did to one fault's events, from the events of the report:
     which were withheld, which published; the delay labelled as the last mute's."""
     muted = facts.muted.get(code)
-    withheld = facts.withheld.get(code)
-    if muted is None and not withheld:
+    events = facts.events.get(code, NO_EVENTS)
+    if muted is None and not events.withheld:
         return []
     pieces: list[Piece] = []
     if muted is not None:
@@ -145,14 +134,7 @@ def muting_lines(code: str, facts: Facts, width: int) -> list[Text]:
         ]
     else:
         pieces.append(piece("muted in its cluster;", "magenta"))
-    published = facts.published.get(code)
-    pieces.append(
-        piece(
-            f" events withheld: {_events(withheld) if withheld else 'none'};"
-            f" published: {_events(published) if published else 'none'}",
-            "magenta",
-        )
-    )
+    pieces.append(piece(f" FaultEvents: {events_words(events)}", "magenta"))
     return words(pieces, width, indent=4)
 
 

@@ -38,7 +38,7 @@ from medkit_replay.outputs.json_report import (
     report_dict,
     transition_dict,
 )
-from medkit_replay.outputs.muting import muting_sentence
+from medkit_replay.outputs.muting import NO_EVENTS, event_counts, muting_sentence
 from medkit_replay.text import severity_name
 
 if TYPE_CHECKING:
@@ -197,6 +197,8 @@ def _recording_row(recording: dict[str, object]) -> dict[str, object]:
 
 def result_tables(result: Result) -> dict[str, pd.DataFrame]:
     """One DataFrame per report table, with stable columns even when empty."""
+    # Counted in one pass, and only when something was muted.
+    counts = event_counts(result) if result.muted_faults else {}
     rows: dict[str, list[dict[str, object]]] = {
         "faults": [fault_dict(f) for f in result.faults],
         "events": [_event_row(event_dict(e)) for e in result.events],
@@ -204,7 +206,8 @@ def result_tables(result: Result) -> dict[str, pd.DataFrame]:
         "reports": [report_dict(r) for r in result.reports],
         "clears": [clear_dict(c) for c in result.clears],
         "muted_faults": [
-            {**muted_dict(m), MUTING: muting_sentence(result, m)} for m in result.muted_faults
+            {**muted_dict(m), MUTING: muting_sentence(counts.get(m.fault_code, NO_EVENTS), m)}
+            for m in result.muted_faults
         ],
         "clusters": [cluster_dict(c) for c in result.clusters],
         "near_misses": [near_miss_dict(n) for n in result.near_misses],
