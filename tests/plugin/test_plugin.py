@@ -252,9 +252,9 @@ def test_golden_reports_and_the_update_flag(
             "E       current:  this run",
             "E       reports differ: 14 differences (fault removed: 4, fault changed: 4,*",
             "E       ACTION_FOLLOW_PATH_ABORTED",
-            "E         ~   status *HEALED *CONFIRMED",
+            "E         ~ status *HEALED *CONFIRMED",
             "E       LOG_BT_NAVIGATOR_4fc83613",
-            "E         -   fault *CONFIRMED *absent",
+            "E         - fault *CONFIRMED *absent",
             "E       run pytest with --update-golden to accept this run as the new golden report",
         ]
     )

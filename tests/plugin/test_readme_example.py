@@ -52,7 +52,7 @@ def test_the_readme_regression_test_runs_as_shown(pytester: pytest.Pytester) -> 
             "E       AssertionError: the run differs from its golden report",
             "E       reports differ: 1 difference (fault added: 1; time tolerance 0.000 s)",
             "E       MOTOR_LEFT_OVERHEAT",
-            "E         +   fault *absent *HEALED",
+            "E         + fault *absent *HEALED",
         ]
     )
 
