@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from medkit_replay.model import InputSummary, Loss
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.routing import Handler
+    from medkit_replay.history import FaultHistory
     from medkit_replay.pipeline.tracing import Tracer
     from medkit_replay.result import Consumption, Result
     from medkit_replay.trace import FaultTrace
@@ -73,6 +74,7 @@ def replay(
     live_start: Callable[[int], None] | None = None,
     evidence: EvidenceOptions | None = None,
     spill_listener: SpillListener | None = None,
+    history: FaultHistory | None = None,
 ) -> Result:
     """Replay inputs (merged as one recording) through the bridges and the fault manager.
 
@@ -99,6 +101,9 @@ def replay(
             message read, as ``summary.start_ns``), which people's times count from.
         evidence: the node graph and where to write black-box recordings (freeze frames
             and recordings are listed in the result whatever it says).
+        history: fill this FaultHistory with every state each fault went through and the
+            correlation view after each change (``serve`` answers any moment from it). The
+            Result does not depend on it.
         spill_listener: told of every chunk of events, transitions, reports and clears
             spilled to disk (to encode them elsewhere meanwhile); the Result does not
             depend on it.
@@ -141,6 +146,10 @@ def replay(
         from medkit_replay.pipeline.tracing import Tracer  # noqa: PLC0415
 
         tracer = Tracer(trace, timeline, router)
+    if history is not None:  # serve's index, loaded only for it
+        from medkit_replay.pipeline.history import HistoryRecorder  # noqa: PLC0415
+
+        HistoryRecorder(history, manager)
     tallies: dict[str, Tally] = {}  # bytes fetched from remote inputs, both passes
     run = replay_pass(
         paths,

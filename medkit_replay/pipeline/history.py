@@ -1,0 +1,75 @@
+"""Fills a FaultHistory from the one replay: each fault's state after every change, and the
+correlation view after every step that can change it (``medkit-replay serve``).
+
+Only listens, like the tracer: it wraps the row sinks the manager already writes through.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from medkit_replay.history import CorrelationState
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from medkit_replay.engine.manager import FaultManager, Row
+    from medkit_replay.history import FaultHistory
+    from medkit_replay.model import ClearRequest
+
+
+class HistoryRecorder:
+    """Attach to the manager (after any tracer) before the replay runs."""
+
+    def __init__(self, history: FaultHistory, manager: FaultManager) -> None:
+        self.history = history
+        self.manager = manager
+        report, event, transition = manager.report_row, manager.event_row, manager.transition_row
+        manager.set_row_sinks(self._report(report), event, self._transition(transition))
+        self._ticked, self._cleared = manager.cleanup_tick, manager.clear
+        manager.cleanup_tick = self._cleanup_tick  # type: ignore[method-assign]
+        manager.clear = self._clear  # type: ignore[method-assign]
+
+    def _note(self, t_ns: int, code: str) -> None:
+        fault = self.manager.storage.faults.get(code)
+        if fault is not None:
+            self.history.put(t_ns, self.manager.snapshot(fault))
+
+    def _note_correlation(self, t_ns: int) -> None:
+        correlation = self.manager.correlation
+        if correlation is not None:
+            state = CorrelationState(tuple(correlation.muted_faults()), tuple(correlation.clusters()))
+            self.history.put_correlation(t_ns, state)
+
+    def _report(self, inner: Callable[[Row], None]) -> Callable[[Row], None]:
+        # (t_ns, origin, topic, code, event name, severity, description, source, accepted, ...)
+        def sink(row: Row) -> None:
+            inner(row)
+            if row[8]:
+                t_ns, code = row[0], row[3]
+                assert isinstance(t_ns, int) and isinstance(code, str)
+                self._note(t_ns, code)
+                if row[4] == "FAILED":
+                    self._note_correlation(t_ns)
+
+        return sink
+
+    def _transition(self, inner: Callable[[Row], None]) -> Callable[[Row], None]:
+        # (t_ns, code, before, after, cause, source): clears, auto-clears and the timer
+        def sink(row: Row) -> None:
+            inner(row)
+            t_ns, code = row[0], row[1]
+            assert isinstance(t_ns, int) and isinstance(code, str)
+            self._note(t_ns, code)
+
+        return sink
+
+    def _clear(self, request: ClearRequest) -> bool:
+        # A clear changes the muted map even when the code is unknown or already cleared.
+        success = self._cleared(request)
+        self._note_correlation(request.t_ns)
+        return success
+
+    def _cleanup_tick(self, now_ns: int) -> None:
+        self._ticked(now_ns)
+        self._note_correlation(now_ns)
