@@ -21,6 +21,7 @@ from medkit_replay.commands.explain import explain
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.follow import follow
 from medkit_replay.commands.streams import discard_stdout
+from medkit_replay.commands.serve import serve
 from medkit_replay.commands.suggest_rules import suggest_rules
 from medkit_replay.commands.sweep import sweep
 from medkit_replay.commands.validate import validate
@@ -113,6 +114,7 @@ cli.add_command(diff)
 cli.add_command(explain)
 cli.add_command(fleet)
 cli.add_command(follow)
+cli.add_command(serve)
 cli.add_command(sweep)
 cli.add_command(suggest_rules)
 cli.add_command(validate)

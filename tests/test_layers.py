@@ -115,6 +115,9 @@ HEAVY_AT_START = (
     "medkit_replay.outputs.tables",
     "medkit_replay.outputs.terminal",
     "medkit_replay.outputs.progress",
+    "medkit_replay.gateway",
+    "starlette",
+    "uvicorn",
 )
 """Loaded only when a command runs: none of it is needed to print a version or a help text."""
 
@@ -133,6 +136,7 @@ HEAVY_AT_START = (
         ["sweep", "--help"],
         ["suggest-rules", "--help"],
         ["validate", "--help"],
+        ["serve", "--help"],
     ],
 )
 def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
@@ -168,6 +172,7 @@ ALLOWED: dict[str, set[str]] = {
     "spool": {"errors"},
     "result": {"model", "releases"},
     "trace": {"model"},
+    "history": {"model"},
     "engine": {"model", "wildcards", "releases"},
     "bridges": {"model", "engine", "trace", "releases"},
     "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases"},
@@ -187,7 +192,18 @@ ALLOWED: dict[str, set[str]] = {
     "evidence": NEUTRAL | {"files", "yaml_bounds", "inputs", "msgdefs"},
     "parity": {"model", "bridges", "config", "releases"},
     "pipeline": NEUTRAL
-    | {"spool", "result", "parity", "engine", "bridges", "inputs", "config", "trace", "evidence"},
+    | {
+        "spool",
+        "result",
+        "parity",
+        "engine",
+        "bridges",
+        "inputs",
+        "config",
+        "trace",
+        "evidence",
+        "history",
+    },
     # explaining reads a Result and the FaultTrace the replay filled; it draws through outputs.
     "explaining": NEUTRAL | {"result", "trace", "outputs"},
     "outputs": NEUTRAL | {"result", "files", "msgdefs", "spool"},
@@ -199,6 +215,9 @@ ALLOWED: dict[str, set[str]] = {
     # tuning drives several engines through the pipeline's one pass, and runs like a fleet.
     "tuning": NEUTRAL
     | {"result", "files", "spool", "config", "engine", "pipeline", "checks", "fleet", "outputs"},
+    # gateway answers the gateway's REST API from a Result and its FaultHistory; it reuses the
+    # engine's query rules (ListFaults) and reads the node graph's type.
+    "gateway": NEUTRAL | {"result", "history", "engine", "evidence"},
     "pytest_plugin": NEUTRAL | {"result", "pipeline", "checks", "diffing", "outputs"},
     "commands": NEUTRAL
     | {
@@ -215,6 +234,8 @@ ALLOWED: dict[str, set[str]] = {
         "trace",
         "evidence",
         "tuning",
+        "history",
+        "gateway",
     },
     "cli": {"commands", "errors", "outputs", "version"},
     "__init__": {"errors", "version", "pipeline", "result", "outputs"},

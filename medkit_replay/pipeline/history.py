@@ -38,7 +38,9 @@ class HistoryRecorder:
     def _note_correlation(self, t_ns: int) -> None:
         correlation = self.manager.correlation
         if correlation is not None:
-            state = CorrelationState(tuple(correlation.muted_faults()), tuple(correlation.clusters()))
+            state = CorrelationState(
+                tuple(correlation.muted_faults()), tuple(correlation.clusters())
+            )
             self.history.put_correlation(t_ns, state)
 
     def _report(self, inner: Callable[[Row], None]) -> Callable[[Row], None]:

@@ -1,0 +1,147 @@
+"""What ``serve`` answers from: one replay's result, its fault history, the entities and the clips.
+
+Built once before the server starts; every request reads it and nothing changes it after.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from pathlib import Path
+
+from medkit_replay.gateway.entities import discover
+
+if TYPE_CHECKING:
+    from medkit_replay.evidence.graph import NodeGraph
+    from medkit_replay.gateway.entities import Entities
+    from medkit_replay.history import FaultHistory
+    from medkit_replay.model import EvidenceRecording, SnapshotCapture
+    from medkit_replay.result import Result
+
+NS_PER_SEC = 1_000_000_000
+
+
+@dataclass(frozen=True, slots=True)
+class ServedRecording:
+    """One replayed recording, ready to answer the gateway's read-only routes.
+
+    ``origin_ns`` is the recording's start (``at=0``), ``end_ns`` its last message; ``clips``
+    maps a black-box recording's id to the storage file the replay wrote for it (the only
+    files ever served); ``default_at_ns`` is ``--at`` (None: the end).
+    """
+
+    result: Result
+    history: FaultHistory
+    entities: Entities
+    origin_ns: int
+    end_ns: int
+    clips: dict[str, Path]
+    default_at_ns: int | None = None
+    correlation_enabled: bool = False
+
+    def moment(self, seconds: float | None) -> int:
+        """Bag time of ``seconds`` from the start; None: ``--at``, else the end.
+
+        A moment past the end is the end; one before the start is the start (nothing yet).
+        """
+        if seconds is None:
+            return self.default_at_ns if self.default_at_ns is not None else self.end_ns
+        t_ns = self.origin_ns + round(seconds * NS_PER_SEC)
+        return max(self.origin_ns, min(t_ns, self.end_ns))
+
+    def captures_at(self, code: str, t_ns: int) -> list[SnapshotCapture]:
+        """The freeze frames and snapshots of ``code`` taken by ``t_ns`` that the manager
+        keeps (one it later drops, by its cap or a clear, is not shown at any moment)."""
+        return [
+            c
+            for c in self.result.snapshots
+            if c.fault_code == code and c.t_ns <= t_ns and c.retained
+        ]
+
+    def recordings_at(self, t_ns: int) -> list[EvidenceRecording]:
+        """The black-box recordings the manager holds at ``t_ns``: finished by then (its
+        post-roll over) and not yet deleted."""
+        return [
+            r
+            for r in self.result.recordings
+            if r.end_ns <= t_ns and (r.deleted_ns is None or r.deleted_ns > t_ns)
+        ]
+
+    def recording_facts(self) -> dict[str, object]:
+        """The ``x-medkit`` route's body: the recording served, its span and the release."""
+        result = self.result
+        return {
+            "tool": "medkit-replay",
+            "tool_version": result.tool_version,
+            "upstream_release": result.upstream_release,
+            "inputs": [
+                {
+                    "path": s.path,
+                    "storage": s.storage,
+                    "start_ns": s.start_ns,
+                    "end_ns": s.end_ns,
+                    "message_count": s.message_count,
+                }
+                for s in result.inputs
+            ],
+            "start_ns": self.origin_ns,
+            "end_ns": self.end_ns,
+            "duration_sec": (self.end_ns - self.origin_ns) / NS_PER_SEC,
+            "default_at_sec": (
+                (self.default_at_ns - self.origin_ns) / NS_PER_SEC
+                if self.default_at_ns is not None
+                else None
+            ),
+            "faults": len(result.faults),
+            "events": len(result.events),
+            "recordings": len(result.recordings),
+            "warnings": list(result.warnings),
+        }
+
+
+_STORAGE_SUFFIXES = (".mcap", ".db3")
+
+
+def served_recording(
+    result: Result, history: FaultHistory, graph: NodeGraph | None, at_sec: float | None
+) -> ServedRecording:
+    """What ``serve`` answers from, once the replay (with ``history``) is done.
+
+    Entities come from the graph's nodes and every reporting source the replay saw; a clip is
+    served from the storage file inside the folder the replay wrote for it.
+    """
+    starts = [s.start_ns for s in result.inputs if s.start_ns is not None]
+    ends = [s.end_ns for s in result.inputs if s.end_ns is not None]
+    if result.summary.start_ns is not None:
+        starts.append(result.summary.start_ns)
+    if result.summary.end_ns is not None:
+        ends.append(result.summary.end_ns)
+    origin = min(starts, default=0)
+    end = max(ends, default=origin)
+    names: set[str] = set(graph.publishes) | set(graph.subscribes) if graph is not None else set()
+    for fault in result.faults:
+        names.update(fault.reporting_sources)
+    clips: dict[str, Path] = {}
+    for recording in result.recordings:
+        if recording.path is not None:
+            files = sorted(
+                p for p in Path(recording.path).iterdir() if p.suffix in _STORAGE_SUFFIXES
+            )
+            if len(files) == 1:
+                clips[recording.recording_id] = files[0]
+    fault_manager = result.config.get("fault_manager")
+    correlation = fault_manager.get("correlation") if isinstance(fault_manager, dict) else None
+    served = ServedRecording(
+        result=result,
+        history=history,
+        entities=discover(sorted(names), graph),
+        origin_ns=origin,
+        end_ns=end,
+        clips=clips,
+        correlation_enabled=isinstance(correlation, dict) and bool(correlation.get("enabled")),
+    )
+    if at_sec is not None:
+        return dataclasses.replace(served, default_at_ns=served.moment(at_sec))
+    return served

@@ -1,0 +1,87 @@
+"""``GET /faults/stream``: the replay's FaultEvents as server-sent events, paced by ``--speed``.
+
+Follows the gateway's SSE fault handler at 505bc2d5: ids count events from 1 in the order the
+manager published them, ``Last-Event-ID`` (digits only, else 0; clamped to the newest id) resumes
+after it, a ``:keepalive`` comment is sent after 30 s without an event, and at most
+``sse.max_clients`` (2 by default) streams are open at once (503 beyond). Unlike the live
+gateway, the stream ends after the recording's last event.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from bisect import bisect_left
+from typing import TYPE_CHECKING
+
+from starlette.responses import StreamingResponse
+
+from medkit_replay.gateway.errors import GatewayError
+from medkit_replay.gateway.faults_json import sse_event
+
+if TYPE_CHECKING:
+    from collections.abc import AsyncIterator
+
+    from medkit_replay.gateway.recording import ServedRecording
+
+KEEPALIVE_SEC = 30.0
+"""Seconds without an event before a keep-alive comment (upstream's kKeepaliveIntervalSec)."""
+KEEPALIVE = ":keepalive\n\n"
+NS_PER_SEC = 1_000_000_000
+
+
+def last_event_id(header: str | None, newest: int) -> int:
+    """The id a client has seen: digits only, anything else is 0; never above ``newest``."""
+    if not header or not header.isascii() or not header.isdigit():
+        return 0
+    return min(int(header), newest)
+
+
+class EventStream:
+    """Opens paced event streams over one recording's events, counting the open ones."""
+
+    def __init__(self, served: ServedRecording, *, speed: float, max_clients: int) -> None:
+        self.events = served.result.events
+        self.times = [event.t_ns for event in self.events]
+        self.speed = speed
+        self.max_clients = max_clients
+        self.open = 0
+
+    def response(self, header: str | None, start_ns: int | None) -> StreamingResponse:
+        """A stream for one client: after ``Last-Event-ID`` (``header``), or from the first
+        event at or after ``start_ns`` (an ``at`` moment), else from the first event."""
+        if self.open >= self.max_clients:
+            raise GatewayError(
+                503,
+                "service-unavailable",
+                "Maximum number of SSE clients reached. Please try again later.",
+            )
+        first = last_event_id(header, len(self.events))
+        if first == 0 and start_ns is not None:
+            first = bisect_left(self.times, start_ns)
+        self.open += 1
+        return StreamingResponse(
+            self._frames(first),
+            media_type="text/event-stream",
+            headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+        )
+
+    async def _frames(self, first: int) -> AsyncIterator[str]:
+        """Frames of events ``first + 1`` (1-based ids) onwards, each sent when its bag time
+        comes at ``speed`` times the recorded pace (0: at once); the pace uses the monotonic
+        clock, the events keep bag time."""
+        try:
+            times, events, speed = self.times, self.events, self.speed
+            if first >= len(times):
+                return
+            origin_ns, started = times[first], time.monotonic()
+            for index in range(first, len(times)):
+                if speed > 0:
+                    due = started + (times[index] - origin_ns) / NS_PER_SEC / speed
+                    while (wait := due - time.monotonic()) > 0:
+                        await asyncio.sleep(min(wait, KEEPALIVE_SEC))
+                        if due - time.monotonic() > 0:
+                            yield KEEPALIVE
+                yield sse_event(events[index], index + 1)
+        finally:
+            self.open -= 1

@@ -1,0 +1,116 @@
+"""The fault history serve answers from: filled by the one replay, checked against its report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from medkit_replay.history import CorrelationState, FaultHistory
+from medkit_replay.model import FaultSnapshot, MutedFault
+from medkit_replay.pipeline import replay
+from medkit_replay.result import Result
+
+ROOT = Path(__file__).resolve().parents[2]
+MISSION = ROOT / "sample_bags" / "nav2_mission_mcap"
+NAV2 = ROOT / "rules" / "nav2" / "fault_manager.yaml"
+END = 2**62
+
+
+def snapshot(code: str, status: str = "PREFAILED", count: int = 1) -> FaultSnapshot:
+    return FaultSnapshot(
+        fault_code=code, severity=2, description="", first_occurred_ns=1, last_occurred_ns=1,
+        last_passed_ns=0, occurrence_count=count, status=status,  # type: ignore[arg-type]
+        reporting_sources=("/a",), muted=False, root_cause_code=None, cluster_ids=(),
+    )  # fmt: skip
+
+
+def test_a_fault_is_unknown_before_it_is_reported_and_each_change_holds_from_its_time() -> None:
+    history = FaultHistory()
+    history.put(10, snapshot("B"))
+    history.put(20, snapshot("B", "CONFIRMED", 2))
+    history.put(20, snapshot("B", "CONFIRMED", 3))  # the same moment: the last one holds
+    history.put(30, snapshot("B", "CONFIRMED", 3))  # unchanged: nothing new kept
+    assert history.fault_at("B", 9) is None
+    assert history.fault_at("B", 10) == snapshot("B")
+    assert history.fault_at("B", 19) == snapshot("B")
+    assert history.fault_at("B", 20) == snapshot("B", "CONFIRMED", 3)
+    assert history.fault_at("A", END) is None
+    assert len(history) == 2
+
+
+def test_faults_come_in_fault_code_byte_order_whatever_order_they_appear_in() -> None:
+    history = FaultHistory()
+    for t, code in enumerate(["b", "B", "a_2", "a_10", "Z"]):
+        history.put(t, snapshot(code))
+    assert history.codes == ("B", "Z", "a_10", "a_2", "b")
+    assert [f.fault_code for f in history.faults_at(2)] == ["B", "a_2", "b"]
+
+
+def test_the_correlation_view_keeps_only_changes() -> None:
+    history = FaultHistory()
+    muted = CorrelationState(muted=(MutedFault(fault_code="S", root_cause_code="R", rule_id="r",
+                                               delay_ms=5),))  # fmt: skip
+    history.put_correlation(5, CorrelationState())  # nothing yet: not kept
+    history.put_correlation(7, muted)
+    history.put_correlation(9, muted)
+    history.put_correlation(12, CorrelationState())
+    assert history.correlation_at(6) == CorrelationState()
+    assert history.correlation_at(7) == history.correlation_at(11) == muted
+    assert history.correlation_at(12) == CorrelationState()
+    assert history.change_times == (7, 12)
+
+
+@pytest.fixture(scope="module")
+def replayed() -> tuple[Result, FaultHistory]:
+    history = FaultHistory()
+    return replay([MISSION], [NAV2], history=history), history
+
+
+def test_the_history_at_the_end_is_the_report(replayed: tuple[Result, FaultHistory]) -> None:
+    result, history = replayed
+    assert tuple(history.faults_at(END)) == result.faults
+    state = history.correlation_at(END)
+    assert (state.muted, state.clusters) == (result.muted_faults, result.clusters)
+    assert state.muted  # the mission mutes symptoms under these rules: the view was exercised
+
+
+def test_every_transition_is_the_state_the_history_gives(
+    replayed: tuple[Result, FaultHistory],
+) -> None:
+    result, history = replayed
+    last: dict[tuple[str, int], str] = {}
+    for transition in result.transitions:
+        last[transition.fault_code, transition.t_ns] = transition.to_status
+        before = history.fault_at(transition.fault_code, transition.t_ns - 1)
+        if transition.from_status is None:
+            assert before is None
+        else:
+            assert before is not None and before.status == transition.from_status
+    for (code, t_ns), status in last.items():
+        found = history.fault_at(code, t_ns)
+        assert found is not None and found.status == status
+    assert len(last) > 10
+
+
+def test_every_event_carries_the_state_the_history_gives(
+    replayed: tuple[Result, FaultHistory],
+) -> None:
+    result, history = replayed
+    last = {(e.fault.fault_code, e.t_ns): e.fault for e in result.events}
+    for (code, t_ns), fault in last.items():
+        found = history.fault_at(code, t_ns)
+        assert found is not None
+        assert (found.status, found.occurrence_count, found.last_occurred_ns) == (
+            fault.status, fault.occurrence_count, fault.last_occurred_ns,
+        )  # fmt: skip
+
+
+def test_a_replay_with_a_history_writes_the_same_report(
+    replayed: tuple[Result, FaultHistory],
+) -> None:
+    from medkit_replay.outputs.json_report import dumps  # noqa: PLC0415
+
+    result, _ = replayed
+    plain = replay([MISSION], [NAV2])
+    assert dumps(plain) == dumps(result)
