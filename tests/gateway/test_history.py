@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from medkit_replay.history import CorrelationState, FaultHistory
 from medkit_replay.model import FaultSnapshot, MutedFault
 from medkit_replay.pipeline import replay
-from medkit_replay.result import Result
+
+if TYPE_CHECKING:
+    from medkit_replay.result import Result
 
 ROOT = Path(__file__).resolve().parents[2]
 MISSION = ROOT / "sample_bags" / "nav2_mission_mcap"

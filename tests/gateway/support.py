@@ -1,0 +1,46 @@
+"""Served recordings for the gateway tests: the nav2 sample under its rules, and the generated
+robot of the evidence tests with its black-box recordings written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from medkit_replay.evidence import EvidenceOptions, load_graph
+from medkit_replay.gateway.recording import served_recording
+from medkit_replay.history import FaultHistory
+from medkit_replay.pipeline import replay
+
+if TYPE_CHECKING:
+    from medkit_replay.gateway.recording import ServedRecording
+
+ROOT = Path(__file__).resolve().parents[2]
+MISSION = ROOT / "sample_bags" / "nav2_mission_mcap"
+NAV2 = ROOT / "rules" / "nav2" / "fault_manager.yaml"
+NS = 1_000_000_000
+
+
+def serve_replay(
+    inputs: list[Path],
+    configs: list[Path],
+    *,
+    graph: Path | None = None,
+    clips: Path | None = None,
+    at_sec: float | None = None,
+) -> ServedRecording:
+    """What ``medkit-replay serve`` answers from, built the way the command builds it."""
+    node_graph = load_graph(graph) if graph is not None else None
+    history = FaultHistory()
+    result = replay(
+        inputs,
+        configs,
+        evidence=EvidenceOptions(graph=node_graph, directory=clips),
+        history=history,
+    )
+    return served_recording(result, history, node_graph, at_sec)
+
+
+def seconds(served: ServedRecording, t_ns: int) -> str:
+    """``t_ns`` as the ``at`` parameter (seconds from the recording's start, to the ns)."""
+    offset = t_ns - served.origin_ns
+    return f"{offset // NS}.{offset % NS:09d}"

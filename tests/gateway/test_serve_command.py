@@ -1,0 +1,146 @@
+"""``medkit-replay serve`` as people run it: the real server over a real socket, Ctrl-C, the
+address it takes; bulk data equal to analyze's clips; CORS only for the origins given."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import httpx
+import pytest
+from rosbags.rosbag2 import StoragePlugin
+from starlette.testclient import TestClient
+
+from medkit_replay.cli import main
+from medkit_replay.gateway.app import build_app
+from tests.evidence.robot import write_config, write_robot
+from tests.gateway.schemas import validate
+from tests.gateway.support import MISSION, NAV2, seconds, serve_replay
+
+if TYPE_CHECKING:
+    from medkit_replay.gateway.recording import ServedRecording
+
+
+def start(args: list[str], env: dict[str, str]) -> tuple[subprocess.Popen[str], str]:
+    """The command in a child process, and the base URL it printed once listening."""
+    server = subprocess.Popen(
+        [sys.executable, "-m", "medkit_replay.cli", "serve", *args],
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    assert server.stderr is not None
+    line = server.stderr.readline()
+    while line and "Serving" not in line:
+        line = server.stderr.readline()
+    if "Serving" not in line:
+        server.kill()
+        pytest.fail(f"serve did not start: {line!r}")
+    return server, line.split(" at ", 1)[1].split("/api/v1", 1)[0]
+
+
+def test_the_real_server_answers_httpx_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None:
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    server, base = start([str(MISSION), "--config", str(NAV2), "--port", "0", "--quiet"], env)
+    try:
+        assert base.startswith("http://127.0.0.1:")  # loopback unless --host says otherwise
+        staging = list(tmp_path.iterdir())
+        assert [p.name.startswith("medkit-replay-serve-") for p in staging] == [True]
+        with httpx.Client(base_url=base, timeout=30) as client:
+            faults = client.get("/api/v1/faults", params={"status": "all"})
+            assert faults.status_code == 200
+            validate(faults.json(), "FaultList")
+            assert faults.json()["items"]
+            stream = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": "530"})
+            assert stream.text.count("\n\nid: ") + stream.text.startswith("id: ") == 9
+    finally:
+        server.send_signal(signal.SIGINT)
+        status = server.wait(timeout=30)
+    assert status == 0
+    assert list(tmp_path.iterdir()) == []  # the temporary clip folder went with it
+
+
+def test_an_address_already_taken_is_one_line_and_status_2(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    try:
+        port = taken.getsockname()[1]
+        status = main(["serve", str(MISSION), "--port", str(port), "--quiet"])
+    finally:
+        taken.close()
+    assert status == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"cannot listen on 127.0.0.1:{port}" in err
+
+
+def test_cors_only_for_the_origins_given() -> None:
+    served = serve_replay([MISSION], [NAV2])
+    app = build_app(served, speed=0, cors=["http://localhost:5173"])
+    with TestClient(app) as client:
+        asked = {"Access-Control-Request-Method": "GET"}
+        good = client.options("/api/v1/faults", headers={"Origin": "http://localhost:5173", **asked})
+        assert good.headers["access-control-allow-origin"] == "http://localhost:5173"
+        other = client.get("/api/v1/faults", headers={"Origin": "http://evil.example"})
+        assert "access-control-allow-origin" not in other.headers
+    with TestClient(build_app(served, speed=0)) as client:
+        plain = client.get("/api/v1/faults", headers={"Origin": "http://localhost:5173"})
+        assert "access-control-allow-origin" not in plain.headers
+
+
+@pytest.fixture(scope="module")
+def robot_served(tmp_path_factory: pytest.TempPathFactory) -> tuple[ServedRecording, Path]:
+    root = tmp_path_factory.mktemp("robot")
+    robot = write_robot(root, StoragePlugin.MCAP)
+    config = write_config(root, "mcap")
+    analyzed = root / "analyze_clips"
+    argv = ["analyze", str(robot.bag), str(robot.script), "--config", str(config),
+            "--graph", str(robot.graph), "--evidence", str(analyzed), "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    served = serve_replay(
+        [robot.bag, robot.script], [config], graph=robot.graph, clips=root / "served_clips"
+    )
+    return served, analyzed
+
+
+def test_a_clip_downloads_byte_for_byte_as_analyze_writes_it(
+    robot_served: tuple[ServedRecording, Path],
+) -> None:
+    served, analyzed = robot_served
+    held = [r for r in served.result.recordings if r.deleted_ns is None]
+    assert held
+    with TestClient(build_app(served, speed=0)) as client:
+        apps = [a["id"] for a in client.get("/api/v1/apps").json()["items"]]
+        downloaded = 0
+        for recording in held:
+            code = recording.fault_codes[0]
+            for app in apps:
+                listing = client.get(f"/api/v1/apps/{app}/bulk-data/rosbags").json()
+                validate(listing, "BulkDataDescriptorList")
+                if recording.recording_id not in [d["id"] for d in listing["items"]]:
+                    continue
+                answer = client.get(f"/api/v1/apps/{app}/bulk-data/rosbags/{recording.recording_id}")
+                assert answer.status_code == 200
+                assert answer.headers["content-type"] == "application/x-mcap"
+                written = next((analyzed / recording.recording_id).glob("*.mcap"))
+                assert answer.content == written.read_bytes()
+                detail = client.get(f"/api/v1/apps/{app}/faults/{code}").json()
+                uris = [s.get("bulk_data_uri") for s in detail["environment_data"]["snapshots"]]
+                assert f"/api/v1/apps/{app}/bulk-data/rosbags/{recording.recording_id}" in uris
+                # Before its post-roll ended the manager had not written it yet.
+                early = seconds(served, recording.end_ns - 1)
+                listed = client.get(f"/api/v1/apps/{app}/bulk-data/rosbags?at={early}").json()
+                assert recording.recording_id not in [d["id"] for d in listed["items"]]
+                gone = client.get(
+                    f"/api/v1/apps/{app}/bulk-data/rosbags/{recording.recording_id}?at={early}"
+                )
+                assert gone.status_code == 404
+                downloaded += 1
+        assert downloaded >= len(held)

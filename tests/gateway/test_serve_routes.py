@@ -1,0 +1,225 @@
+"""The served nav2 mission through the gateway's routes: shapes, moments, errors, the stream."""
+
+from __future__ import annotations
+
+import json
+from typing import TYPE_CHECKING
+
+import pytest
+from starlette.testclient import TestClient
+
+from medkit_replay.gateway.app import build_app
+from tests.gateway.schemas import response_schema, validate
+from tests.gateway.support import MISSION, NAV2, seconds, serve_replay
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+
+    from medkit_replay.gateway.recording import ServedRecording
+
+KINDS = ("areas", "components", "apps", "functions")
+
+
+@pytest.fixture(scope="module")
+def served() -> ServedRecording:
+    return serve_replay([MISSION], [NAV2])
+
+
+@pytest.fixture(scope="module")
+def client(served: ServedRecording) -> Iterator[TestClient]:
+    with TestClient(build_app(served, speed=0), base_url="http://127.0.0.1:8080") as client:
+        yield client
+
+
+def checked(client: TestClient, path: str, template: str | None = None) -> object:
+    """GET ``path``: 200, JSON, and valid against the published schema of its route."""
+    answer = client.get(path)
+    assert answer.status_code == 200, (path, answer.text)
+    assert answer.headers["content-type"].startswith("application/json")
+    body = answer.json()
+    schema = response_schema(template or path.split("?")[0], "get", "200")
+    assert schema is not None, f"no published schema for {template or path}"
+    validate(body, schema)
+    return body
+
+
+def test_root_version_health_and_the_recording(client: TestClient, served: ServedRecording) -> None:
+    checked(client, "/api/v1/", "/")
+    checked(client, "/api/v1/version-info", "/version-info")
+    checked(client, "/api/v1/health", "/health")
+    facts = client.get("/api/v1/x-medkit/recording").json()
+    assert facts["upstream_release"] == served.result.upstream_release
+    assert facts["start_ns"] == served.origin_ns and facts["end_ns"] == served.end_ns
+    assert [i["path"] for i in facts["inputs"]] == [str(MISSION)]
+
+
+def test_every_entity_and_its_faults_have_the_published_shapes(client: TestClient) -> None:
+    seen = 0
+    for kind in KINDS:
+        listing = checked(client, f"/api/v1/{kind}", f"/{kind}")
+        assert isinstance(listing, dict)
+        for item in listing["items"]:
+            entity = f"/api/v1/{kind}/{item['id']}"
+            singular = kind[:-1]
+            checked(client, entity, f"/{kind}/{{{singular}_id}}")
+            faults = checked(client, f"{entity}/faults?status=all", f"/{kind}/{{{singular}_id}}/faults")
+            assert isinstance(faults, dict)
+            for fault in faults["items"]:
+                checked(
+                    client,
+                    f"{entity}/faults/{fault['fault_code']}",
+                    f"/{kind}/{{{singular}_id}}/faults/{{fault_code}}",
+                )
+                seen += 1
+    assert seen  # the mission's reporting sources are entities whose faults are listed
+
+
+def test_the_global_list_at_the_end_is_the_report(client: TestClient, served: ServedRecording) -> None:
+    body = checked(client, "/api/v1/faults?status=all", "/faults")
+    assert isinstance(body, dict)
+    muted = {m.fault_code for m in served.result.muted_faults}
+    expected = [f.fault_code for f in served.result.faults if f.fault_code not in muted]
+    assert [item["fault_code"] for item in body["items"]] == expected
+    with_muted = client.get("/api/v1/faults?status=all&include_muted=true").json()
+    assert [i["fault_code"] for i in with_muted["items"]] == [
+        f.fault_code for f in served.result.faults
+    ]
+
+
+def test_any_moment_answers_the_state_the_transitions_left(
+    client: TestClient, served: ServedRecording
+) -> None:
+    last: dict[tuple[str, int], str] = {}
+    for transition in served.result.transitions:
+        last[transition.fault_code, transition.t_ns] = transition.to_status
+    muted_ever = {m.fault_code for m in served.result.muted_faults}
+    checked_moments = 0
+    for (code, t_ns), status in list(last.items())[::3]:
+        at = seconds(served, t_ns)
+        body = client.get(f"/api/v1/faults?status=all&include_muted=true&at={at}").json()
+        found = {item["fault_code"]: item for item in body["items"]}
+        assert found[code]["status"] == status, (code, at)
+        prefixed = client.get(f"/at/{at}/api/v1/faults?status=all&include_muted=true").json()
+        assert prefixed == body
+        checked_moments += 1
+        if code in muted_ever:
+            continue
+    assert checked_moments > 5
+    # Before the first report nothing is known; a moment past the end is the end.
+    assert client.get("/api/v1/faults?status=all&at=0").json()["items"] == []
+    end = client.get("/api/v1/faults?status=all&at=1e9").json()
+    assert end == client.get("/api/v1/faults?status=all").json()
+
+
+def test_the_detail_at_a_moment_is_that_moment_s_fault(
+    client: TestClient, served: ServedRecording
+) -> None:
+    transition = next(t for t in served.result.transitions if t.from_status is not None)
+    history = served.history
+    app = next(
+        a["id"]
+        for a in client.get("/api/v1/apps").json()["items"]
+        if any(
+            f["fault_code"] == transition.fault_code
+            for f in client.get(f"/api/v1/apps/{a['id']}/faults?status=all").json()["items"]
+        )
+    )
+    before = seconds(served, transition.t_ns - 1)
+    body = client.get(f"/api/v1/apps/{app}/faults/{transition.fault_code}?at={before}").json()
+    fault = history.fault_at(transition.fault_code, transition.t_ns - 1)
+    assert fault is not None
+    assert body["x-medkit"]["status_raw"] == fault.status == transition.from_status
+    assert body["x-medkit"]["occurrence_count"] == fault.occurrence_count
+
+
+def test_unknown_things_answer_404_with_a_generic_error(client: TestClient) -> None:
+    app = client.get("/api/v1/apps").json()["items"][0]["id"]
+    for path in (
+        "/api/v1/apps/no_such_app",
+        "/api/v1/apps/no_such_app/faults",
+        f"/api/v1/apps/{app}/faults/NO_SUCH_CODE",
+        f"/api/v1/apps/{app}/bulk-data/rosbags/no_such_recording",
+        f"/api/v1/apps/{app}/bulk-data/no_such_category",
+        "/api/v1/gadgets",
+        "/api/v1/apps/x/y/z/w/v",
+        "/nowhere",
+    ):
+        answer = client.get(path)
+        assert answer.status_code == 404, path
+        validate(answer.json(), "GenericError")
+
+
+def test_writes_answer_405_with_a_generic_error(client: TestClient) -> None:
+    app = client.get("/api/v1/apps").json()["items"][0]["id"]
+    for method, path in (
+        ("DELETE", "/api/v1/faults"),
+        ("DELETE", f"/api/v1/apps/{app}/faults"),
+        ("DELETE", f"/api/v1/apps/{app}/faults/ANY_CODE"),
+        ("POST", f"/api/v1/apps/{app}/bulk-data/rosbags"),
+        ("DELETE", f"/api/v1/apps/{app}/bulk-data/rosbags/any"),
+        ("PUT", "/api/v1/apps"),
+    ):
+        answer = client.request(method, path)
+        assert answer.status_code == 405, (method, path)
+        validate(answer.json(), "GenericError")
+        assert answer.headers["allow"] == "GET, HEAD"
+
+
+def test_bad_parameters_answer_400(client: TestClient) -> None:
+    for path in (
+        "/api/v1/faults?status=bogus",
+        "/api/v1/faults?at=soon",
+        "/api/v1/faults?at=nan",
+        "/at/inf/api/v1/faults",
+    ):
+        answer = client.get(path)
+        assert answer.status_code == 400, path
+        validate(answer.json(), "GenericError")
+
+
+def test_no_route_reaches_the_file_system(client: TestClient) -> None:
+    app = client.get("/api/v1/apps").json()["items"][0]["id"]
+    for file_id in ("..%2F..%2F..%2Fetc%2Fpasswd", "%2Fetc%2Fpasswd", "..", "metadata.yaml"):
+        answer = client.get(f"/api/v1/apps/{app}/bulk-data/rosbags/{file_id}")
+        assert answer.status_code == 404, file_id
+        assert "root:" not in answer.text
+
+
+def sse_frames(text: str) -> list[dict[str, str]]:
+    frames = []
+    for block in text.split("\n\n"):
+        fields: dict[str, str] = {}
+        for line in block.splitlines():
+            if line.startswith(":"):
+                continue
+            name, _, value = line.partition(":")
+            fields[name] = value.removeprefix(" ")
+        if fields:
+            frames.append(fields)
+    return frames
+
+
+def test_the_stream_is_the_report_s_events_in_order(
+    client: TestClient, served: ServedRecording
+) -> None:
+    answer = client.get("/api/v1/faults/stream")
+    assert answer.status_code == 200
+    assert answer.headers["content-type"].startswith("text/event-stream")
+    frames = sse_frames(answer.text)
+    events = list(served.result.events)
+    assert [int(f["id"]) for f in frames] == list(range(1, len(events) + 1))
+    for frame, event in zip(frames, events, strict=True):
+        data = json.loads(frame["data"])
+        assert data["event_type"] == event.event_type
+        assert data["fault"]["fault_code"] == event.fault.fault_code
+
+
+def test_the_stream_resumes_after_last_event_id(client: TestClient, served: ServedRecording) -> None:
+    total = len(served.result.events)
+    resumed = sse_frames(client.get("/api/v1/faults/stream", headers={"Last-Event-ID": "5"}).text)
+    assert [int(f["id"]) for f in resumed] == list(range(6, total + 1))
+    for junk in ("-1", "abc", "5x", ""):
+        frames = sse_frames(client.get("/api/v1/faults/stream", headers={"Last-Event-ID": junk}).text)
+        assert int(frames[0]["id"]) == 1, junk
+    beyond = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(10**30)})
+    assert sse_frames(beyond.text) == []
