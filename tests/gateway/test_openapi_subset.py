@@ -9,6 +9,7 @@ import re
 from typing import Any
 
 import pytest
+import yaml
 from jsonschema import Draft202012Validator
 
 from tests.gateway import schemas
@@ -165,6 +166,15 @@ def test_the_subset_names_its_source_and_parses() -> None:
     assert document["openapi"] == "3.1.0"
     assert document["info"]["version"] == "0.4.0"
     assert list(document) == ["components", "info", "openapi", "paths", "servers", "tags"]
+
+
+def test_the_subset_keeps_the_documents_layout() -> None:
+    # The published document is a sorted-key YAML dump; the excerpt is written the same way, so a
+    # hand edit that reorders keys or changes a value's form shows up here.
+    text = schemas.SUBSET.read_text(encoding="utf-8")
+    body = "".join(line for line in text.splitlines(keepends=True) if not line.startswith("#"))
+    dumped = yaml.safe_dump(yaml.safe_load(body), sort_keys=True, default_flow_style=False)
+    assert body == dumped
 
 
 def test_load_document_hands_out_copies() -> None:
