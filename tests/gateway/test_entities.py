@@ -101,6 +101,8 @@ def test_internal_nodes_leave_the_apps_but_stay_listed_as_function_hosts() -> No
     tools = entities.get("functions", "tools")
     assert tools is not None
     assert entities.fault_sources(tools) == frozenset()
+    # the filter reads the app id: a qualified id no longer starts with "_"
+    assert ids(discover(["/a/_x", "/b/_x"]), "apps") == ["a__x", "b__x"]
 
 
 def test_graph_nodes_join_the_recorded_names() -> None:
