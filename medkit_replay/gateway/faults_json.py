@@ -435,6 +435,16 @@ def _compact_frame(capture: SnapshotCapture) -> JsonObject:
     return _freeze_frame("freeze_frame", "", "", data, at_ns)
 
 
+def recordings_held_at(
+    recordings: Iterable[EvidenceRecording], t_ns: int
+) -> list[EvidenceRecording]:
+    """The recordings the manager holds once bag time ``t_ns`` has passed: stored when their
+    post-roll ended, until deleted; in the order they were stored."""
+    return [
+        r for r in recordings if r.end_ns <= t_ns and (r.deleted_ns is None or r.deleted_ns > t_ns)
+    ]
+
+
 def _order_recordings(recordings: Iterable[EvidenceRecording]) -> list[EvidenceRecording]:
     """Newest first: by the time each was stored (its end), later ones first on a tie."""
     indexed = list(enumerate(recordings))
@@ -465,12 +475,14 @@ def fault_detail_body(
 ) -> JsonObject:
     """``GET /{kind}/{id}/faults/{code}``: item, environment_data and x-medkit.
 
-    ``captures``: the fault's freeze-frame captures, their ``retained`` and ``freeze_frame``
-    flags saying what the manager holds at the moment served. ``recordings``: the black-box
-    recordings stored for the fault at that moment, in the order they were stored.
+    ``captures``: freeze-frame captures, their ``retained`` and ``freeze_frame`` flags saying
+    what the manager holds at the moment served (those of other faults are skipped).
+    ``recordings``: those held at that moment (recordings_held_at); the fault's are shown.
     ``bag_sizes``: bytes on disk by recording id (default: the messages' payload bytes).
     """
-    item: JsonObject = {"code": fault.fault_code}
+    code = fault.fault_code
+    captures = [c for c in captures if c.fault_code == code]
+    item: JsonObject = {"code": code}
     if fault.description:
         item["fault_name"] = fault.description
     item["severity"] = fault.severity
@@ -482,7 +494,7 @@ def fault_detail_body(
         if frame is not None:
             snapshots.append(_compact_frame(frame))
     entity_path = f"/{kind}/{entity_id}"
-    for recording in _order_recordings(recordings):
+    for recording in _order_recordings(r for r in recordings if code in r.fault_codes):
         snapshots.append(
             {
                 "type": "rosbag",
@@ -608,8 +620,8 @@ def rosbag_descriptors_body(
     """``GET /{kind}/{id}/bulk-data/rosbags``: one descriptor per recording of a fault that
     one of ``source_filters`` (bulk_source_filters) reports, exactly that source.
 
-    ``recordings``: those stored at the moment served, in the order they were stored;
-    ``faults``: the faults held then, by code. Per source, the newest rows come first; a
+    ``recordings``: those held at the moment served (recordings_held_at); ``faults``: the
+    faults held then, by code. Per source, the newest rows come first; a
     recording appears once, at its first row, with the codes of its listed rows.
     """
     rows: list[tuple[int, int, str, EvidenceRecording]] = []  # (stored at, seq, code, bag)
@@ -671,8 +683,8 @@ def rosbag_download(
     The id is a recording id, else (older clients) a fault code meaning its newest recording.
     The entity must own one of the recording's faults (and the fault code asked for, on the
     second path); ``scope`` is its bulk_source_filters. A recording that was not written (no
-    ``path``) answers as a bag missing from disk does. ``recordings``: those stored at the
-    moment served, in the order they were stored; ``faults``: the faults held then.
+    ``path``) answers as a bag missing from disk does. ``recordings``: those held at the
+    moment served (recordings_held_at); ``faults``: the faults held then, by code.
     """
     if fault_code_error(bulk_data_id, max_code_length + _RECORDING_ID_EXTRA) is not None:
         raise bulk_data_not_found(bulk_data_id)

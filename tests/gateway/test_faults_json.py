@@ -7,6 +7,7 @@ at that commit, and to the fault manager and transport code they call.
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from typing import Any
 
 import pytest
@@ -37,6 +38,7 @@ from medkit_replay.gateway.faults_json import (
     parse_last_event_id,
     parse_status_filter,
     query_bool,
+    recordings_held_at,
     rosbag_descriptors_body,
     rosbag_download,
     scoped_fault,
@@ -543,6 +545,26 @@ def test_rosbag_snapshots_newest_first_with_a_download_uri() -> None:
             "x-medkit": {"captured_at": "2023-11-14T22:13:31.000Z"},
         },
     ]
+
+
+def test_detail_shows_only_this_faults_captures_and_recordings() -> None:
+    other_capture = SnapshotCapture(
+        fault_code="OTHER", capture_id=5, t_ns=T0, retained=True, freeze_frame=True, topics=(TEMP,)
+    )
+    mine = recording("fault_MOTOR_OVERHEAT_1", ("OTHER", "MOTOR_OVERHEAT"), 11)
+    theirs = recording("fault_OTHER_2", ("OTHER",), 21)
+    shown = snaps(detail([other_capture], [mine, theirs]))
+    assert [s["name"] for s in shown] == ["rosbag_fault_MOTOR_OVERHEAT_1"]
+
+
+def test_recordings_are_held_from_their_post_roll_end_until_deleted() -> None:
+    kept = recording("a", ("A",), 10)
+    gone = replace(recording("b", ("A",), 20), deleted_ns=T0 + 30 * 10**9)
+    ids = [
+        [r.recording_id for r in recordings_held_at([kept, gone], T0 + at * 10**9)]
+        for at in (9, 10, 25, 30)
+    ]
+    assert ids == [[], ["a"], ["a", "b"], ["a"]]
 
 
 def scoped(code: str, found: FaultSnapshot | None) -> FaultSnapshot:
