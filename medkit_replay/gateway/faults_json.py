@@ -1,17 +1,15 @@
-"""The bodies of the gateway's fault routes, its fault event stream and its bulk-data routes,
-built from a replay's state at one moment: plain JSON-ready values, no web framework, no I/O.
+"""The bodies of the gateway's fault routes (lists, per-entity lists, the detail) built from a
+replay's state at one moment: plain JSON-ready values, no web framework, no I/O.
 
 Upstream: ros2_medkit at 505bc2d5 — fault_handlers.cpp (status filter, lists, the detail with
 build_status_object and build_sovd_fault_response), core/faults/fault_scope.cpp (per-entity
 scope), ros2/conversions/fault_msg_conversions.cpp and ros2_fault_service_transport.cpp (the
-fault and correlation JSON), sse_fault_handler.cpp (event frames), bulkdata_handlers.cpp
-(categories, rosbag descriptors, download checks), and the fault manager's GetFault, GetRosbag
-and ListRosbags. Bag time stands where the live gateway shows its wall clock.
+fault and correlation JSON), the fault manager's ListFaults and GetFault. Bag time stands where
+the live gateway shows its wall clock.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import TYPE_CHECKING
@@ -23,20 +21,17 @@ from medkit_replay.gateway.errors import (
     ERR_SERVICE_UNAVAILABLE,
     ID_FIELDS,
     GatewayError,
-    bulk_data_not_found,
-    bulk_data_not_in_scope,
     invalid_parameter,
 )
 from medkit_replay.model import NS_PER_SEC, SEVERITY_NAMES
 
 if TYPE_CHECKING:
-    from collections.abc import Collection, Container, Iterable, Mapping, Sequence
+    from collections.abc import Collection, Iterable, Mapping, Sequence
 
     from medkit_replay.history import CorrelationState
     from medkit_replay.model import (
         Cluster,
         EvidenceRecording,
-        FaultEvent,
         FaultSnapshot,
         MutedFault,
         SnapshotCapture,
@@ -45,19 +40,7 @@ if TYPE_CHECKING:
 
 JsonObject = dict[str, object]
 
-STATUS_VALUES = ("pending", "confirmed", "cleared", "healed", "all")
-"""Every ``status`` query value the fault routes accept."""
-_ALLOWED_STATUS_TEXT = "pending, confirmed, cleared, healed, all"
 _MAX_ROUTE_CODE = 256  # the detail handler's own bound on a fault code, before the manager's
-_RECORDING_ID_EXTRA = 32  # a recording id may be this much longer than a fault code
-
-KEEPALIVE = ":keepalive\n\n"
-"""The comment the fault stream sends when nothing happened for KEEPALIVE_INTERVAL_SEC."""
-KEEPALIVE_INTERVAL_SEC = 30
-BUFFERED_EVENTS = 100
-"""How many events the live stream keeps for a client resuming with Last-Event-ID."""
-
-_MIMETYPES = {"mcap": "application/x-mcap", "sqlite3": "application/x-sqlite3"}
 
 # Primary field shown as a freeze frame's ``data`` for common message types.
 _PRIMARY_FIELDS = {
@@ -79,21 +62,15 @@ _PRIMARY_FIELDS = {
 # -- times -------------------------------------------------------------------------------------
 
 
-def _time_msg(t_ns: int) -> tuple[int, int]:
+def time_msg(t_ns: int) -> tuple[int, int]:
     """builtin_interfaces/Time of a nanosecond count: (sec, nanosec)."""
     return divmod(t_ns, NS_PER_SEC)
 
 
 def unix_seconds(t_ns: int) -> float:
     """A fault time as the fault JSON writes it: ``sec + nanosec / 1e9``."""
-    sec, nanosec = _time_msg(t_ns)
+    sec, nanosec = time_msg(t_ns)
     return sec + nanosec / 1e9
-
-
-def _event_seconds(t_ns: int) -> float:
-    # The stream's own conversion multiplies by 1e-9, which can differ in the last bit.
-    sec, nanosec = _time_msg(t_ns)
-    return float(sec) + float(nanosec) * 1e-9
 
 
 def iso8601(t_ns: int) -> str:
@@ -143,6 +120,10 @@ _FILTERS = {
 }
 
 
+STATUS_VALUES = tuple(_FILTERS)
+"""Every ``status`` query value the fault routes accept."""
+
+
 def parse_status_filter(
     value: str | None, extra_params: Mapping[str, object] | None = None
 ) -> StatusFilter:
@@ -154,7 +135,7 @@ def parse_status_filter(
     found = _FILTERS.get(value)
     if found is None:
         params: JsonObject = {
-            "allowed_values": _ALLOWED_STATUS_TEXT,
+            "allowed_values": ", ".join(STATUS_VALUES),
             "parameter": "status",
             "value": value,
         }
@@ -445,20 +426,20 @@ def recordings_held_at(
     ]
 
 
-def _order_recordings(recordings: Iterable[EvidenceRecording]) -> list[EvidenceRecording]:
+def ordered_recordings(recordings: Iterable[EvidenceRecording]) -> list[EvidenceRecording]:
     """Newest first: by the time each was stored (its end), later ones first on a tie."""
     indexed = list(enumerate(recordings))
     indexed.sort(key=lambda pair: (pair[1].end_ns, pair[0]), reverse=True)
     return [recording for _, recording in indexed]
 
 
-def _bag_size(recording: EvidenceRecording, bag_sizes: Mapping[str, int] | None) -> int:
+def bag_size(recording: EvidenceRecording, bag_sizes: Mapping[str, int] | None) -> int:
     if bag_sizes is not None and recording.recording_id in bag_sizes:
         return bag_sizes[recording.recording_id]
     return recording.bytes
 
 
-def _duration_sec(recording: EvidenceRecording) -> float:
+def duration_sec(recording: EvidenceRecording) -> float:
     return (recording.end_ns - recording.start_ns) / NS_PER_SEC
 
 
@@ -494,14 +475,14 @@ def fault_detail_body(
         if frame is not None:
             snapshots.append(_compact_frame(frame))
     entity_path = f"/{kind}/{entity_id}"
-    for recording in _order_recordings(r for r in recordings if code in r.fault_codes):
+    for recording in ordered_recordings(r for r in recordings if code in r.fault_codes):
         snapshots.append(
             {
                 "type": "rosbag",
                 "name": f"rosbag_{recording.recording_id}",
                 "bulk_data_uri": f"{entity_path}/bulk-data/rosbags/{recording.recording_id}",
-                "size_bytes": _bag_size(recording, bag_sizes),
-                "duration_sec": _duration_sec(recording),
+                "size_bytes": bag_size(recording, bag_sizes),
+                "duration_sec": duration_sec(recording),
                 "format": rosbag_format,
                 "x-medkit": {"captured_at": iso8601(recording.end_ns)},
             }
@@ -523,191 +504,3 @@ def fault_detail_body(
         },
         "x-medkit": extension,
     }
-
-
-# -- the fault stream --------------------------------------------------------------------------
-
-
-def sse_event(event: FaultEvent, event_id: int, *, app_id: str | None = None) -> str:
-    """One server-sent event: ``id``, ``event`` and ``data`` lines and the blank line.
-
-    ``app_id``: the app the fault's first reporting source resolves to (event_app_id); the
-    data then names it under ``x-medkit``.
-    """
-    kind = event.event_type.replace("\r", "").replace("\n", "")
-    data: JsonObject = {
-        "event_type": kind,
-        "fault": fault_json(event.fault),
-        "timestamp": _event_seconds(event.t_ns),
-    }
-    if event.auto_cleared_codes:
-        data["auto_cleared_codes"] = list(event.auto_cleared_codes)
-    if app_id is not None:
-        data["x-medkit"] = {"entity_type": "apps", "entity_id": app_id}
-    text = json.dumps(
-        data, separators=(",", ":"), sort_keys=True, ensure_ascii=False, allow_nan=False
-    )
-    return f"id: {event_id}\nevent: {kind}\ndata: {text}\n\n"
-
-
-def event_app_id(
-    fault: FaultSnapshot,
-    app_ids: Container[str],
-    node_to_app: Mapping[str, str] | None = None,
-) -> str | None:
-    """The app an event's fault is shown under: its first reporting source's app (by the
-    node-to-app links when given, else the app named like the node, else
-    ``<namespace with _ for />_<node>``); None when no app matches."""
-    if not fault.reporting_sources or not fault.reporting_sources[0]:
-        return None
-    fqn = fault.reporting_sources[0]
-    if node_to_app:
-        linked = node_to_app.get(fqn) or (node_to_app.get(fqn[1:]) if fqn[0] == "/" else None)
-        if linked:
-            return linked
-    cut = fqn.rfind("/")
-    name = fqn[cut + 1 :]
-    if name and name in app_ids:
-        return name
-    if cut > 0:
-        namespaced = fqn[1:cut].replace("/", "_") + "_" + name
-        if namespaced in app_ids:
-            return namespaced
-    return None
-
-
-def parse_last_event_id(value: str | None, newest_id: int) -> int:
-    """The id a resuming client last saw: digits only (else 0), at most ``newest_id``."""
-    if not value or not value.isascii() or not value.isdigit():
-        return 0
-    number = int(value)
-    if number >= 1 << 64:
-        return 0
-    return min(number, newest_id)
-
-
-# -- bulk data ---------------------------------------------------------------------------------
-
-
-def bulk_categories_body() -> JsonObject:
-    """``GET /{kind}/{id}/bulk-data``: only ``rosbags`` (a replay has no upload store)."""
-    return {"items": ["rosbags"]}
-
-
-def rosbag_mimetype(fmt: str) -> str:
-    """The MIME type of a bag in ``fmt`` (``mcap``, ``sqlite3``)."""
-    return _MIMETYPES.get("sqlite3" if fmt == "db3" else fmt, "application/octet-stream")
-
-
-def bulk_source_filters(kind: str, sources: frozenset[str], fallback: str) -> list[str]:
-    """The sources whose bags an entity lists: its fault sources in byte order; without any,
-    ``fallback`` (its FQN, else namespace) except for a function, which then lists none."""
-    if sources:
-        return sorted(sources, key=lambda s: s.encode("utf-8"))
-    if kind == "functions" or not fallback:
-        return []
-    return [fallback]
-
-
-def rosbag_descriptors_body(
-    recordings: Sequence[EvidenceRecording],
-    faults: Mapping[str, FaultSnapshot],
-    source_filters: Sequence[str],
-    *,
-    rosbag_format: str,
-    bag_sizes: Mapping[str, int] | None = None,
-) -> JsonObject:
-    """``GET /{kind}/{id}/bulk-data/rosbags``: one descriptor per recording of a fault that
-    one of ``source_filters`` (bulk_source_filters) reports, exactly that source.
-
-    ``recordings``: those held at the moment served (recordings_held_at); ``faults``: the
-    faults held then, by code. Per source, the newest rows come first; a
-    recording appears once, at its first row, with the codes of its listed rows.
-    """
-    rows: list[tuple[int, int, str, EvidenceRecording]] = []  # (stored at, seq, code, bag)
-    for recording in recordings:
-        for code in recording.fault_codes:
-            rows.append((recording.end_ns, len(rows), code, recording))
-    found: dict[str, tuple[EvidenceRecording, set[str]]] = {}
-    for source in source_filters:
-        if not source:
-            continue
-        mine = [
-            row for row in rows if row[2] in faults and source in faults[row[2]].reporting_sources
-        ]
-        mine.sort(key=lambda row: (row[0], row[1]), reverse=True)
-        for _, _, code, recording in mine:
-            found.setdefault(recording.recording_id, (recording, set()))[1].add(code)
-    items = []
-    for recording, codes in found.values():
-        created = iso8601(recording.end_ns)
-        items.append(
-            {
-                "id": recording.recording_id,
-                "name": f"{recording.recording_id} recording {created}",
-                "mimetype": rosbag_mimetype(rosbag_format),
-                "size": _bag_size(recording, bag_sizes),
-                "creation_date": created,
-                "x-medkit": {
-                    "fault_codes": sorted(codes, key=lambda c: c.encode("utf-8")),
-                    "duration_sec": _duration_sec(recording),
-                    "format": rosbag_format,
-                    "recording_id": recording.recording_id,
-                },
-            }
-        )
-    return {"items": items}
-
-
-@dataclass(frozen=True, slots=True)
-class RosbagDownload:
-    """What ``GET /{kind}/{id}/bulk-data/rosbags/{bulk_data_id}`` serves."""
-
-    recording: EvidenceRecording
-    mimetype: str
-    filename: str  # for Content-Disposition
-
-
-def rosbag_download(
-    recordings: Sequence[EvidenceRecording],
-    faults: Mapping[str, FaultSnapshot],
-    bulk_data_id: str,
-    *,
-    entity_id: str,
-    scope: Collection[str],
-    rosbag_format: str,
-    max_code_length: int,
-) -> RosbagDownload:
-    """The recording a bulk-data id names for an entity, or the 404 the gateway answers.
-
-    The id is a recording id, else (older clients) a fault code meaning its newest recording.
-    The entity must own one of the recording's faults (and the fault code asked for, on the
-    second path); ``scope`` is its bulk_source_filters. A recording that was not written (no
-    ``path``) answers as a bag missing from disk does. ``recordings``: those held at the
-    moment served (recordings_held_at); ``faults``: the faults held then, by code.
-    """
-    if fault_code_error(bulk_data_id, max_code_length + _RECORDING_ID_EXTRA) is not None:
-        raise bulk_data_not_found(bulk_data_id)
-    recording = next((r for r in recordings if r.recording_id == bulk_data_id), None)
-    if recording is None:
-        if fault_code_error(bulk_data_id, max_code_length) is not None:
-            raise bulk_data_not_found(bulk_data_id)
-        requested = faults.get(bulk_data_id)
-        newest = next(
-            (r for r in _order_recordings(recordings) if bulk_data_id in r.fault_codes), None
-        )
-        if requested is None or newest is None or newest.path is None:
-            raise bulk_data_not_found(bulk_data_id)
-        if not in_scope(requested.reporting_sources, scope):
-            raise bulk_data_not_in_scope(entity_id)
-        recording = newest
-    elif recording.path is None:
-        raise bulk_data_not_found(bulk_data_id)
-    owned = any(
-        code in faults and in_scope(faults[code].reporting_sources, scope)
-        for code in recording.fault_codes
-    )
-    if not owned:
-        raise bulk_data_not_in_scope(entity_id)
-    filename = f"{recording.recording_id}.{rosbag_format}".replace('"', "_")
-    return RosbagDownload(recording, rosbag_mimetype(rosbag_format), filename)

@@ -1,63 +1,41 @@
 """The fault routes' bodies against what ros2_medkit's gateway at 505bc2d5 answers.
 
-Handler references are to fault_handlers.cpp, sse_fault_handler.cpp and bulkdata_handlers.cpp
-at that commit, and to the fault manager and transport code they call.
+Handler references are to fault_handlers.cpp at that commit, and to the fault manager and
+transport code it calls.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 from typing import Any
 
 import pytest
 
-from medkit_replay.gateway.errors import (
-    GatewayError,
-    body_bytes,
-    check_entity_id,
-    entity_not_found,
-    error_body,
-    error_status,
-    method_not_allowed,
-    wrong_entity_type,
-)
+from medkit_replay.gateway.errors import GatewayError
 from medkit_replay.gateway.faults_json import (
-    KEEPALIVE,
-    RosbagDownload,
     StatusFilter,
-    bulk_categories_body,
-    bulk_source_filters,
     entity_fault_list_body,
-    event_app_id,
     fault_detail_body,
     fault_json,
     fault_list_body,
     in_scope,
     iso8601,
-    parse_last_event_id,
     parse_status_filter,
     query_bool,
     recordings_held_at,
-    rosbag_descriptors_body,
-    rosbag_download,
     scoped_fault,
-    sse_event,
     status_object,
 )
 from medkit_replay.history import CorrelationState
 from medkit_replay.model import (
     Cluster,
     EvidenceRecording,
-    FaultEvent,
     FaultSnapshot,
     MutedFault,
     SnapshotCapture,
     SnapshotTopic,
-    Status,
 )
-
-T0 = 1_700_000_000_000_000_000  # 2023-11-14T22:13:20Z
+from tests.gateway.support import T0, fault, recording
 
 
 def codes(body: dict[str, Any]) -> list[str]:
@@ -68,48 +46,6 @@ def codes(body: dict[str, Any]) -> list[str]:
 def snaps(body: dict[str, Any]) -> list[Any]:
     """A detail body's snapshots."""
     return list(body["environment_data"]["snapshots"])
-
-
-def fault(
-    code: str,
-    status: Status = "CONFIRMED",
-    sources: tuple[str, ...] = ("/robot/motor",),
-    *,
-    severity: int = 2,
-    description: str = "too hot",
-    last_passed_ns: int = 0,
-) -> FaultSnapshot:
-    return FaultSnapshot(
-        fault_code=code,
-        severity=severity,
-        description=description,
-        first_occurred_ns=T0 + 250_000_000,
-        last_occurred_ns=T0 + 5_123_456_789,
-        last_passed_ns=last_passed_ns,
-        occurrence_count=3,
-        status=status,
-        reporting_sources=sources,
-        muted=False,
-        root_cause_code=None,
-        cluster_ids=(),
-    )
-
-
-def recording(
-    rid: str, codes: tuple[str, ...], end_s: int, *, path: str | None = "/ev/x"
-) -> EvidenceRecording:
-    return EvidenceRecording(
-        recording_id=rid,
-        fault_codes=codes,
-        start_ns=T0 + (end_s - 6) * 10**9,
-        end_ns=T0 + end_s * 10**9,
-        topics=(),
-        messages=10,
-        bytes=4096,
-        deleted_ns=None,
-        deleted_reason=None,
-        path=path,
-    )
 
 
 NO_CORRELATION = CorrelationState()
@@ -640,258 +576,6 @@ def test_a_fault_of_another_entity_is_not_found_here() -> None:
     assert caught.value.status == 404
     assert caught.value.parameters is not None
     assert str(caught.value.parameters["details"]).startswith("Fault is not in scope")
-
-
-# -- GET /faults/stream: sse_fault_handler.cpp format_sse_event ------------------------------------
-
-
-def test_sse_frame_text() -> None:
-    event = FaultEvent(
-        t_ns=T0 + 500_000_000,
-        event_type="fault_cleared",
-        fault=fault("ROOT", "CLEARED"),
-        auto_cleared_codes=("SYMPTOM",),
-    )
-    frame = sse_event(event, 7, app_id="motor")
-    lines = frame.split("\n")
-    assert lines[:2] == ["id: 7", "event: fault_cleared"]
-    assert lines[3:] == ["", ""]
-    data = lines[2].removeprefix("data: ")
-    assert data == (
-        '{"auto_cleared_codes":["SYMPTOM"],"event_type":"fault_cleared","fault":'
-        '{"description":"too hot","fault_code":"ROOT","first_occurred":1700000000.25,'
-        '"last_occurred":1700000005.1234567,"occurrence_count":3,'
-        '"reporting_sources":["/robot/motor"],"severity":2,"severity_label":"ERROR",'
-        '"status":"CLEARED"},"timestamp":1700000000.5,'
-        '"x-medkit":{"entity_id":"motor","entity_type":"apps"}}'
-    )
-    assert json.loads(data)["fault"]["last_occurred"] == 1_700_000_005 + 123_456_789 / 1e9
-
-
-def test_sse_frame_without_cascade_or_app_has_neither_key() -> None:
-    event = FaultEvent(t_ns=T0, event_type="fault_confirmed", fault=fault("A"))
-    data = json.loads(sse_event(event, 1).split("\n")[2].removeprefix("data: "))
-    assert sorted(data) == ["event_type", "fault", "timestamp"]
-    assert KEEPALIVE == ":keepalive\n\n"
-
-
-@pytest.mark.parametrize(
-    ("sources", "apps", "expected"),
-    [
-        (("/robot/motor",), {"motor"}, "motor"),
-        (("/robot/arm/motor",), {"robot_arm_motor"}, "robot_arm_motor"),
-        (("/robot/motor",), {"lidar"}, None),
-        ((), {"motor"}, None),
-    ],
-)
-def test_event_app_id_as_resolve_entity_context(
-    sources: tuple[str, ...], apps: set[str], expected: str | None
-) -> None:
-    assert event_app_id(fault("A", sources=sources), apps) == expected
-
-
-def test_event_app_id_prefers_the_node_links() -> None:
-    assert event_app_id(fault("A"), {"motor"}, {"robot/motor": "drive"}) == "drive"
-
-
-@pytest.mark.parametrize(
-    ("raw", "expected"),
-    [(None, 0), ("", 0), ("5", 5), ("12", 10), ("-1", 0), ("3a", 0), ("18446744073709551616", 0)],
-)
-def test_last_event_id_parse_and_clamp(raw: str | None, expected: int) -> None:
-    assert parse_last_event_id(raw, newest_id=10) == expected
-
-
-# -- bulk data: bulkdata_handlers.cpp -------------------------------------------------------------
-
-
-def test_categories_are_only_rosbags() -> None:
-    assert bulk_categories_body() == {"items": ["rosbags"]}
-
-
-def test_source_filters_fall_back_to_the_fqn_except_for_functions() -> None:
-    assert bulk_source_filters("apps", frozenset({"/b", "/a"}), "/x") == ["/a", "/b"]
-    assert bulk_source_filters("components", frozenset(), "/robot") == ["/robot"]
-    assert bulk_source_filters("functions", frozenset(), "/robot") == []
-
-
-def test_descriptors_fold_rows_by_recording_newest_first() -> None:
-    faults = {
-        "A": fault("A"),
-        "B": fault("B"),
-        "C": fault("C", sources=("/robot/lidar",)),
-        "D": fault("D", sources=("/robot/motor/sub",)),  # below the app: not an exact source
-    }
-    old = recording("fault_A_1", ("A",), 11)
-    burst = recording("fault_B_2", ("B", "A", "C"), 51)
-    child = recording("fault_D_3", ("D",), 71)
-    body = rosbag_descriptors_body(
-        [old, burst, child], faults, ["/robot/motor"], rosbag_format="sqlite3"
-    )
-    assert body == {
-        "items": [
-            {
-                "id": "fault_B_2",
-                "name": "fault_B_2 recording 2023-11-14T22:14:11.000Z",
-                "mimetype": "application/x-sqlite3",
-                "size": 4096,
-                "creation_date": "2023-11-14T22:14:11.000Z",
-                "x-medkit": {
-                    "fault_codes": ["A", "B"],  # C is reported by another source
-                    "duration_sec": 6.0,
-                    "format": "sqlite3",
-                    "recording_id": "fault_B_2",
-                },
-            },
-            {
-                "id": "fault_A_1",
-                "name": "fault_A_1 recording 2023-11-14T22:13:31.000Z",
-                "mimetype": "application/x-sqlite3",
-                "size": 4096,
-                "creation_date": "2023-11-14T22:13:31.000Z",
-                "x-medkit": {
-                    "fault_codes": ["A"],
-                    "duration_sec": 6.0,
-                    "format": "sqlite3",
-                    "recording_id": "fault_A_1",
-                },
-            },
-        ]
-    }
-
-
-DOWNLOAD_FAULTS = {"A": fault("A"), "C": fault("C", sources=("/robot/lidar",))}
-BAGS = [
-    recording("fault_A_1", ("A",), 11),
-    recording("fault_A_2", ("A",), 21),
-    recording("fault_C_3", ("C",), 31),
-    recording("fault_A_4", ("A",), 41, path=None),
-]
-
-
-def download(bulk_id: str) -> RosbagDownload:
-    return rosbag_download(
-        BAGS,
-        DOWNLOAD_FAULTS,
-        bulk_id,
-        entity_id="motor",
-        scope=frozenset({"/robot/motor"}),
-        rosbag_format="mcap",
-        max_code_length=128,
-    )
-
-
-def test_download_by_recording_id() -> None:
-    got = download("fault_A_1")
-    assert (got.recording.recording_id, got.mimetype, got.filename) == (
-        "fault_A_1",
-        "application/x-mcap",
-        "fault_A_1.mcap",
-    )
-
-
-def test_download_by_fault_code_serves_its_newest_recording() -> None:
-    # GetRosbag's fallback: a fault code means the fault's newest recording
-    got = rosbag_download(
-        BAGS[:3],
-        DOWNLOAD_FAULTS,
-        "A",
-        entity_id="motor",
-        scope=frozenset({"/robot/motor"}),
-        rosbag_format="mcap",
-        max_code_length=128,
-    )
-    assert got.recording.recording_id == "fault_A_2"
-
-
-@pytest.mark.parametrize(
-    ("bulk_id", "message", "params"),
-    [
-        ("fault_C_3", "Bulk-data not found for this entity", {"entity_id": "motor"}),
-        ("C", "Bulk-data not found for this entity", {"entity_id": "motor"}),
-        ("fault_A_4", "Bulk-data not found", {"bulk_data_id": "fault_A_4"}),
-        ("nothing", "Bulk-data not found", {"bulk_data_id": "nothing"}),
-        ("A", "Bulk-data not found", {"bulk_data_id": "A"}),  # its newest was never written
-        ("..", "Bulk-data not found", {"bulk_data_id": ".."}),
-        ("..%2Fsecret", "Bulk-data not found", {"bulk_data_id": "..%2Fsecret"}),
-    ],
-)
-def test_download_refusals_are_404(bulk_id: str, message: str, params: dict[str, str]) -> None:
-    with pytest.raises(GatewayError) as caught:
-        download(bulk_id)
-    err = caught.value
-    assert (err.status, err.error_code, err.message, err.parameters) == (
-        404,
-        "resource-not-found",
-        message,
-        params,
-    )
-
-
-# -- errors: primitives.cpp write_generic_error, handler_context.cpp -------------------------------
-
-
-def test_error_body_is_the_generic_error() -> None:
-    assert error_body(entity_not_found("ghost")) == {
-        "error_code": "entity-not-found",
-        "message": "Entity not found",
-        "parameters": {"entity_id": "ghost"},
-    }
-    assert error_body(GatewayError(404, "resource-not-found", "Unknown category: x", {})) == {
-        "error_code": "resource-not-found",
-        "message": "Unknown category: x",
-    }
-
-
-def test_vendor_codes_go_under_vendor_error() -> None:
-    body = error_body(GatewayError(400, "x-medkit-collection-not-supported", "no"))
-    assert body == {
-        "error_code": "vendor-error",
-        "vendor_code": "x-medkit-collection-not-supported",
-        "message": "no",
-    }
-    assert error_status(GatewayError(200, "internal-error", "x")) == 400
-
-
-def test_writes_answer_405() -> None:
-    err = method_not_allowed("DELETE", "/api/v1/faults")
-    assert (err.status, error_body(err)["error_code"]) == (405, "invalid-request")
-
-
-def test_wrong_entity_type_names_both_types() -> None:
-    err = wrong_entity_type("motor", "components", "apps")
-    assert (err.status, err.message) == (
-        400,
-        "Invalid entity type for route: expected Component, got App",
-    )
-
-
-@pytest.mark.parametrize(
-    ("entity_id", "details"),
-    [
-        ("", "Entity ID cannot be empty"),
-        ("a" * 257, "Entity ID too long (max 256 characters)"),
-        (
-            "a/b",
-            "Entity ID contains invalid character: '/'. "
-            "Only alphanumeric, underscore and hyphen are allowed",
-        ),
-        (
-            "a\nb",
-            "Entity ID contains invalid character: '0x0a'. "
-            "Only alphanumeric, underscore and hyphen are allowed",
-        ),
-    ],
-)
-def test_malformed_entity_ids_answer_400(entity_id: str, details: str) -> None:
-    with pytest.raises(GatewayError) as caught:
-        check_entity_id(entity_id)
-    assert caught.value.parameters == {"details": details, "entity_id": entity_id}
-    check_entity_id("front-left_door2")
-
-
-def test_bodies_are_written_indented_with_sorted_keys() -> None:
-    assert body_bytes({"b": [], "a": "é"}) == b'{\n  "a": "\xc3\xa9",\n  "b": []\n}'
 
 
 @pytest.mark.parametrize(
