@@ -434,12 +434,14 @@ def ordered_recordings(recordings: Iterable[EvidenceRecording]) -> list[Evidence
 
 
 def bag_size(recording: EvidenceRecording, bag_sizes: Mapping[str, int] | None) -> int:
+    """A bag's ``size_bytes``: its bytes on disk when known, else its messages' payload."""
     if bag_sizes is not None and recording.recording_id in bag_sizes:
         return bag_sizes[recording.recording_id]
     return recording.bytes
 
 
 def duration_sec(recording: EvidenceRecording) -> float:
+    """A bag's ``duration_sec``: the span it was open (buffered history plus post-roll)."""
     return (recording.end_ns - recording.start_ns) / NS_PER_SEC
 
 
@@ -476,17 +478,17 @@ def fault_detail_body(
             snapshots.append(_compact_frame(frame))
     entity_path = f"/{kind}/{entity_id}"
     for recording in ordered_recordings(r for r in recordings if code in r.fault_codes):
-        snapshots.append(
-            {
-                "type": "rosbag",
-                "name": f"rosbag_{recording.recording_id}",
-                "bulk_data_uri": f"{entity_path}/bulk-data/rosbags/{recording.recording_id}",
-                "size_bytes": bag_size(recording, bag_sizes),
-                "duration_sec": duration_sec(recording),
-                "format": rosbag_format,
-                "x-medkit": {"captured_at": iso8601(recording.end_ns)},
-            }
-        )
+        bag: JsonObject = {
+            "type": "rosbag",
+            "name": f"rosbag_{recording.recording_id}",
+            "bulk_data_uri": f"{entity_path}/bulk-data/rosbags/{recording.recording_id}",
+            "size_bytes": bag_size(recording, bag_sizes),
+            "duration_sec": duration_sec(recording),
+            "format": rosbag_format,
+        }
+        if recording.end_ns > 0:  # a zero stamp is left out rather than shown as 1970
+            bag["x-medkit"] = {"captured_at": iso8601(recording.end_ns)}
+        snapshots.append(bag)
 
     extension: JsonObject = {"occurrence_count": fault.occurrence_count}
     if fault.reporting_sources:

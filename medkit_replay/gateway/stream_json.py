@@ -22,6 +22,7 @@ KEEPALIVE = ":keepalive\n\n"
 KEEPALIVE_INTERVAL_SEC = 30
 BUFFERED_EVENTS = 100
 """How many events the live stream keeps for a client resuming with Last-Event-ID."""
+_UINT64_DIGITS = 20  # longer ids are out of range, as for the gateway's stoull
 
 
 def _event_seconds(t_ns: int) -> float:
@@ -80,9 +81,7 @@ def event_app_id(
 
 def parse_last_event_id(value: str | None, newest_id: int) -> int:
     """The id a resuming client last saw: digits only (else 0), at most ``newest_id``."""
-    if not value or not value.isascii() or not value.isdigit():
+    if not value or len(value) > _UINT64_DIGITS or not value.isascii() or not value.isdigit():
         return 0
     number = int(value)
-    if number >= 1 << 64:
-        return 0
-    return min(number, newest_id)
+    return 0 if number >= 1 << 64 else min(number, newest_id)

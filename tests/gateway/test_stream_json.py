@@ -69,7 +69,16 @@ def test_event_app_id_prefers_the_node_links() -> None:
 
 @pytest.mark.parametrize(
     ("raw", "expected"),
-    [(None, 0), ("", 0), ("5", 5), ("12", 10), ("-1", 0), ("3a", 0), ("18446744073709551616", 0)],
+    [
+        (None, 0),
+        ("", 0),
+        ("5", 5),
+        ("12", 10),  # above the newest id: clamped
+        ("-1", 0),
+        ("3a", 0),
+        ("18446744073709551616", 0),  # 2**64: out of stoull's range
+        ("9" * 5000, 0),
+    ],
 )
 def test_last_event_id_parse_and_clamp(raw: str | None, expected: int) -> None:
     assert parse_last_event_id(raw, newest_id=10) == expected
