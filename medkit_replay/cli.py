@@ -20,8 +20,8 @@ from medkit_replay.commands.diff import diff
 from medkit_replay.commands.explain import explain
 from medkit_replay.commands.fleet import fleet
 from medkit_replay.commands.follow import follow
-from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.commands.serve import serve
+from medkit_replay.commands.streams import discard_stdout
 from medkit_replay.commands.suggest_rules import suggest_rules
 from medkit_replay.commands.sweep import sweep
 from medkit_replay.commands.validate import validate

@@ -69,6 +69,7 @@ def test_every_command_is_checked() -> None:
         "explain",
         "fleet",
         "follow",
+        "serve",
         "suggest-rules",
         "sweep",
         "validate",

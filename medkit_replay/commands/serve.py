@@ -5,6 +5,7 @@ The web stack (Starlette, uvicorn: the ``serve`` extra) is loaded only here, aft
 
 from __future__ import annotations
 
+import contextlib
 import math
 import shutil
 import socket
@@ -86,8 +87,8 @@ def serve(
     http://HOST:PORT (or http://HOST:PORT/at/SECONDS for one moment); every fault route
     also takes ?at=SECONDS. Ctrl-C stops the server.
 
-    Exit status: 0 stopped; 2 bad usage, an input or config that cannot be used, or an
-    address that cannot be listened on.
+    Exit status: 0 stopped by Ctrl-C; 2 bad usage, an input that cannot be read, an invalid
+    config, or an address that cannot be listened on.
 
     \b
     Examples:
@@ -127,7 +128,10 @@ def serve(
             timeout_graceful_shutdown=1,
             lifespan="off",
         )
-        uvicorn.Server(config).run(sockets=[listener])
+        # uvicorn hands Ctrl-C on once it has shut down: the way to stop, not a failure.
+        with contextlib.suppress(KeyboardInterrupt):
+            uvicorn.Server(config).run(sockets=[listener])
+        click.echo("Stopped.", err=True)
     finally:
         listener.close()
         if staging is not None:
@@ -135,9 +139,9 @@ def serve(
 
 
 def _listen(host: str, port: int) -> socket.socket:
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    listener = socket.socket(family, socket.SOCK_STREAM)
     try:
-        family = socket.AF_INET6 if ":" in host else socket.AF_INET
-        listener = socket.socket(family, socket.SOCK_STREAM)
         listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         # Accepted connections inherit it: without it a response sent in two writes (headers,
         # body) waits on the client's delayed ACK, 40 ms a request.
@@ -145,6 +149,7 @@ def _listen(host: str, port: int) -> socket.socket:
         listener.bind((host, port))
         listener.listen(128)
     except OSError as err:
+        listener.close()
         raise MedkitReplayError(f"cannot listen on {host}:{port}: {err.strerror or err}") from None
     return listener
 

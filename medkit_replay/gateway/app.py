@@ -6,9 +6,8 @@ live here; the bodies come from ``faults_json``, ``discovery_json`` and ``stream
 
 from __future__ import annotations
 
-import json
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from starlette.applications import Starlette
 from starlette.exceptions import HTTPException
@@ -18,21 +17,33 @@ from starlette.responses import FileResponse, Response
 from starlette.routing import Route
 
 from medkit_replay.gateway import discovery_json
+from medkit_replay.gateway.bulk_json import (
+    bulk_categories_body,
+    bulk_source_filters,
+    rosbag_descriptors_body,
+    rosbag_download,
+)
 from medkit_replay.gateway.errors import (
+    ERR_INTERNAL_ERROR,
+    ERR_INVALID_REQUEST,
+    ERR_RESOURCE_NOT_FOUND,
+    ID_FIELDS,
     GatewayError,
+    body_bytes,
     error_body,
+    error_status,
     invalid_parameter,
     method_not_allowed,
-    not_found,
-    unknown_route,
+    unknown_category,
 )
 from medkit_replay.gateway.faults_json import (
-    bulk_categories_body,
     entity_fault_list_body,
     fault_detail_body,
     fault_list_body,
     parse_status_filter,
-    rosbag_descriptors_body,
+    query_bool,
+    recordings_held_at,
+    scoped_fault,
 )
 from medkit_replay.gateway.stream import EventStream
 
@@ -44,6 +55,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.gateway.entities import Entity
     from medkit_replay.gateway.recording import ServedRecording
+    from medkit_replay.model import FaultSnapshot
 
 API = "/api/v1"
 KINDS = ("areas", "components", "apps", "functions")
@@ -51,11 +63,10 @@ READ_METHODS = frozenset({"GET", "HEAD"})
 ALL_METHODS = ["GET", "HEAD", "POST", "PUT", "PATCH", "DELETE"]
 MAX_RESPONSE_BYTES = 256 * 1024 * 1024
 """The largest JSON body answered (a fault list of this size means something is wrong)."""
-MAX_REQUEST_BYTES = 64 * 1024
-"""The largest request (line, headers, body) the server reads; every route is a GET."""
 MOMENT_PREFIX = "/at/"
 ROSBAG_CATEGORY = "rosbags"
-_TRUE = frozenset({"true", "1"})
+SUB_ENTITIES = {"areas": "subareas", "components": "subcomponents"}
+"""The nested collections whose members have bulk-data routes of their own."""
 
 
 class MomentPrefix:
@@ -72,7 +83,7 @@ class MomentPrefix:
             try:
                 seconds = _seconds(text)
             except GatewayError as err:
-                await _json(err.status, error_body(err))(scope, receive, send)
+                await _json(error_status(err), error_body(err))(scope, receive, send)
                 return
             scope = dict(scope)
             scope["path"] = "/" + rest
@@ -86,29 +97,31 @@ def _seconds(text: str) -> float:
     except ValueError:
         value = math.nan
     if not math.isfinite(value):
-        raise invalid_parameter("at", text, "a number of seconds from the recording's start")
+        raise invalid_parameter(
+            "Invalid moment", {"parameter": "at", "value": text[:64],
+                               "details": "seconds from the recording's start"}
+        )  # fmt: skip
     return value
 
 
 def _json(status: int, body: object, headers: dict[str, str] | None = None) -> Response:
-    text = json.dumps(body, ensure_ascii=False, separators=(",", ":"))
-    if len(text) > MAX_RESPONSE_BYTES:  # characters: a lower bound of the bytes
+    data = body_bytes(body)
+    if len(data) > MAX_RESPONSE_BYTES:
         err = GatewayError(
             500, "x-medkit-response-too-large", "The answer exceeds the server's response bound"
         )
-        text = json.dumps(error_body(err))
-        status = err.status
-    return Response(text, status, headers=headers, media_type="application/json")
+        data, status = body_bytes(error_body(err)), err.status
+    return Response(data, status, headers=headers, media_type="application/json")
 
 
 class GatewayApp:
     """The routes' handlers over one recording (one instance per server)."""
 
-    def __init__(self, served: ServedRecording, *, speed: float, max_streams: int = 2) -> None:
+    def __init__(self, served: ServedRecording, *, speed: float, max_streams: int) -> None:
         self.served = served
         self.stream = EventStream(served, speed=speed, max_clients=max_streams)
 
-    # -- helpers ---------------------------------------------------------------------------
+    # -- what a request names --------------------------------------------------------------
 
     def moment(self, request: Request) -> int:
         """Bag time the request asks about: ``?at=``, else the ``/at/`` prefix, else ``--at``."""
@@ -119,13 +132,22 @@ class GatewayApp:
         return self.served.moment(prefixed if isinstance(prefixed, float) else None)
 
     def entity(self, request: Request) -> Entity:
-        kind, entity_id = request.path_params["kind"], request.path_params["entity_id"]
+        """The entity of a ``/{kind}/{id}/...`` route (a nested sub-area's or sub-component's
+        when the route names one), refused as the gateway refuses it."""
+        params = request.path_params
+        kind = params["kind"]
         if kind not in KINDS:
-            raise unknown_route(request.url.path)
-        found = self.served.entities.get(kind, entity_id)
-        if found is None:
-            raise not_found(kind, entity_id)
-        return found
+            raise _unknown_route(request)
+        nested = params.get("nested")
+        if nested is not None:
+            if nested != SUB_ENTITIES.get(kind):
+                raise _unknown_route(request)
+            discovery_json.route_entity(self.served.entities, kind, params["parent_id"])
+            return discovery_json.route_entity(self.served.entities, kind, params["entity_id"])
+        return discovery_json.route_entity(self.served.entities, kind, params["entity_id"])
+
+    def faults_by_code(self, t_ns: int) -> dict[str, FaultSnapshot]:
+        return {f.fault_code: f for f in self.served.history.faults_at(t_ns)}
 
     # -- root, health, the recording -------------------------------------------------------
 
@@ -133,10 +155,10 @@ class GatewayApp:
         return _json(200, discovery_json.root_body())
 
     async def version_info(self, request: Request) -> Response:
-        return _json(200, discovery_json.version_body())
+        return _json(200, discovery_json.version_info_body())
 
     async def health(self, request: Request) -> Response:
-        return _json(200, discovery_json.health_body(self.served.entities, self.served.end_ns))
+        return _json(200, discovery_json.health_body(self.moment(request)))
 
     async def recording(self, request: Request) -> Response:
         return _json(200, self.served.recording_facts())
@@ -146,20 +168,20 @@ class GatewayApp:
     async def collection(self, request: Request) -> Response:
         kind = request.path_params["kind"]
         if kind not in KINDS:
-            raise unknown_route(request.url.path)
-        return _json(200, discovery_json.collection_body(self.served.entities, kind))
+            raise _unknown_route(request)
+        return _json(200, discovery_json.list_body(self.served.entities, kind))
 
     async def detail(self, request: Request) -> Response:
         entity = self.entity(request)
-        return _json(200, discovery_json.entity_body(self.served.entities, entity))
+        return _json(200, discovery_json.detail_body(self.served.entities, entity))
 
     async def related(self, request: Request) -> Response:
-        entity = self.entity(request)
-        name = request.path_params["relation"]
-        body = discovery_json.relation_body(self.served.entities, entity, name)
-        if body is None:
-            raise unknown_route(request.url.path)
-        return _json(200, body)
+        kind, relation = request.path_params["kind"], request.path_params["relation"]
+        if kind not in KINDS or relation not in discovery_json.RELATIONS[kind]:
+            raise _unknown_route(request)
+        entities = self.served.entities
+        owner = discovery_json.relation_owner(entities, kind, request.path_params["entity_id"])
+        return _json(200, discovery_json.relation_body(entities, owner, relation))
 
     # -- faults ----------------------------------------------------------------------------
 
@@ -172,36 +194,51 @@ class GatewayApp:
             history.faults_at(t_ns),
             history.correlation_at(t_ns),
             status,
-            include_muted=query.get("include_muted", "").lower() in _TRUE,
-            include_clusters=query.get("include_clusters", "").lower() in _TRUE,
-            correlation_enabled=self.served.correlation_enabled,
+            include_muted=query_bool(query.get("include_muted")),
+            include_clusters=query_bool(query.get("include_clusters")),
         )
         return _json(200, body)
 
     async def entity_faults(self, request: Request) -> Response:
         entity = self.entity(request)
         status = parse_status_filter(
-            request.query_params.get("status"), {_ID_FIELDS[entity.kind]: entity.id}
+            request.query_params.get("status"), {ID_FIELDS[entity.kind]: entity.id}
         )
         t_ns = self.moment(request)
-        sources = self.served.entities.fault_sources(entity)
-        return _json(
-            200, entity_fault_list_body(self.served.history.faults_at(t_ns), sources, status)
+        entities, history = self.served.entities, self.served.history
+        body = entity_fault_list_body(
+            history.faults_at(t_ns),
+            history.correlation_at(t_ns),
+            status,
+            kind=entity.kind,
+            entity_id=entity.id,
+            sources=entities.fault_sources(entity),
+            source_id=entity.fqn,
+            component_count=len(entities.components_in(entity.id)),
         )
+        return _json(200, body)
 
     async def fault(self, request: Request) -> Response:
         entity = self.entity(request)
         code = request.path_params["code"]
         t_ns = self.moment(request)
-        found = self.served.history.fault_at(code, t_ns)
-        if found is None:
-            raise not_found("faults", code)
+        served = self.served
+        found = scoped_fault(
+            code,
+            served.history.fault_at(code, t_ns),
+            kind=entity.kind,
+            entity_id=entity.id,
+            sources=served.entities.fault_sources(entity),
+            max_code_length=served.max_code_length,
+        )
         body = fault_detail_body(
             found,
-            self.served.captures_at(code, t_ns),
-            [r for r in self.served.recordings_at(t_ns) if code in r.fault_codes],
-            entity_kind=entity.kind,
+            served.captures_at(code, t_ns),
+            recordings_held_at(served.result.recordings, t_ns),
+            kind=entity.kind,
             entity_id=entity.id,
+            rosbag_format=served.rosbag_format,
+            bag_sizes=served.bag_sizes,
         )
         return _json(200, body)
 
@@ -211,41 +248,47 @@ class GatewayApp:
         self.entity(request)
         return _json(200, bulk_categories_body())
 
-    async def bulk_descriptors(self, request: Request) -> Response:
+    def _bulk_scope(self, request: Request) -> tuple[Entity, list[str], int]:
         entity = self.entity(request)
         category = request.path_params["category"]
         if category != ROSBAG_CATEGORY:
-            raise not_found("bulk-data category", category)
-        recordings = self._recordings_of(entity, self.moment(request))
-        return _json(200, rosbag_descriptors_body(recordings, entity.kind, entity.id))
+            raise unknown_category(category)
+        sources = self.served.entities.fault_sources(entity)
+        fallback = entity.fqn or entity.namespace
+        return entity, bulk_source_filters(entity.kind, sources, fallback), self.moment(request)
+
+    async def bulk_descriptors(self, request: Request) -> Response:
+        _, scope, t_ns = self._bulk_scope(request)
+        served = self.served
+        body = rosbag_descriptors_body(
+            recordings_held_at(served.result.recordings, t_ns),
+            self.faults_by_code(t_ns),
+            scope,
+            rosbag_format=served.rosbag_format,
+            bag_sizes=served.bag_sizes,
+        )
+        return _json(200, body)
 
     async def bulk_download(self, request: Request) -> Response:
-        entity = self.entity(request)
-        category, file_id = request.path_params["category"], request.path_params["file_id"]
-        if category != ROSBAG_CATEGORY:
-            raise not_found("bulk-data category", category)
-        held = {r.recording_id for r in self._recordings_of(entity, self.moment(request))}
-        # Only a clip this replay wrote: the id is looked up, never joined to a path.
-        path = self.served.clips.get(file_id) if file_id in held else None
-        if path is None:
-            raise not_found("bulk-data", file_id)
-        return FileResponse(
-            path,
-            media_type=_MIMETYPES.get(path.suffix, "application/octet-stream"),
-            filename=f"{file_id}{_EXTENSIONS.get(path.suffix, path.suffix)}",
+        entity, scope, t_ns = self._bulk_scope(request)
+        served = self.served
+        found = rosbag_download(
+            recordings_held_at(served.result.recordings, t_ns),
+            self.faults_by_code(t_ns),
+            request.path_params["file_id"],
+            entity_id=entity.id,
+            scope=scope,
+            rosbag_format=served.rosbag_format,
+            max_code_length=served.max_code_length,
         )
-
-    def _recordings_of(self, entity: Entity, t_ns: int) -> list[Any]:
-        codes = {
-            f.fault_code
-            for f in self.served.history.faults_at(t_ns)
-            if self.served.entities.fault_sources(entity) & set(f.reporting_sources)
-        }
-        return [
-            r
-            for r in self.served.recordings_at(t_ns)
-            if r.fault_codes and r.fault_codes[0] in codes
-        ]
+        # Only a clip this replay wrote: looked up by its id, never a path from the request.
+        path = served.clips.get(found.recording.recording_id)
+        if path is None:
+            raise GatewayError(
+                404, ERR_RESOURCE_NOT_FOUND, "Bulk-data not found",
+                {"bulk_data_id": request.path_params["file_id"]},
+            )  # fmt: skip
+        return FileResponse(path, media_type=found.mimetype, filename=found.filename)
 
     # -- the event stream ------------------------------------------------------------------
 
@@ -259,10 +302,10 @@ class GatewayApp:
         )
 
 
-_ID_FIELDS = {"areas": "area_id", "components": "component_id", "apps": "app_id",
-              "functions": "function_id"}  # fmt: skip
-_MIMETYPES = {".mcap": "application/x-mcap", ".db3": "application/x-sqlite3"}
-_EXTENSIONS = {".mcap": ".mcap", ".db3": ".sqlite3"}  # the gateway's download names
+def _unknown_route(request: Request) -> GatewayError:
+    return GatewayError(
+        404, ERR_RESOURCE_NOT_FOUND, "Resource not found", {"path": request.url.path[:256]}
+    )
 
 
 def _read_only(
@@ -270,10 +313,10 @@ def _read_only(
 ) -> Callable[[Request], Awaitable[Response]]:
     async def endpoint(request: Request) -> Response:
         if request.method not in READ_METHODS:
-            raise method_not_allowed(request.method, request.url.path)
-        body = request.headers.get("content-length")
-        if body is not None and body != "0":
-            raise GatewayError(413, "invalid-request", "A read-only route takes no request body")
+            raise method_not_allowed(request.method, request.url.path[:256])
+        length = request.headers.get("content-length", "0")
+        if length != "0" or "transfer-encoding" in request.headers:
+            raise GatewayError(413, ERR_INVALID_REQUEST, "A read-only route takes no request body")
         return await handler(request)
 
     return endpoint
@@ -286,8 +329,13 @@ def build_app(
     cors: Sequence[str] = (),
     max_streams: int = 2,
 ) -> ASGIApp:
-    """The ASGI application answering the gateway's read-only routes over ``served``."""
+    """The ASGI application answering the gateway's read-only routes over ``served``.
+
+    ``max_streams``: event streams open at once (upstream's ``sse.max_clients``, 2).
+    """
     gateway = GatewayApp(served, speed=speed, max_streams=max_streams)
+    entity = "/{kind}/{entity_id}"
+    nested = "/{kind}/{parent_id}/{nested}/{entity_id}"
     table: list[tuple[str, Callable[[Request], Awaitable[Response]]]] = [
         ("", gateway.root),
         ("/", gateway.root),
@@ -297,31 +345,33 @@ def build_app(
         ("/faults/stream", gateway.fault_stream),
         ("/faults", gateway.faults),
         ("/{kind}", gateway.collection),
-        ("/{kind}/{entity_id}", gateway.detail),
-        ("/{kind}/{entity_id}/faults", gateway.entity_faults),
-        ("/{kind}/{entity_id}/faults/{code}", gateway.fault),
-        ("/{kind}/{entity_id}/bulk-data", gateway.bulk_categories),
-        ("/{kind}/{entity_id}/bulk-data/{category}", gateway.bulk_descriptors),
-        ("/{kind}/{entity_id}/bulk-data/{category}/{file_id}", gateway.bulk_download),
-        ("/{kind}/{entity_id}/{relation}", gateway.related),
+        (entity, gateway.detail),
+        (entity + "/faults", gateway.entity_faults),
+        (entity + "/faults/{code}", gateway.fault),
+        (entity + "/bulk-data", gateway.bulk_categories),
+        (entity + "/bulk-data/{category}", gateway.bulk_descriptors),
+        (entity + "/bulk-data/{category}/{file_id}", gateway.bulk_download),
+        (entity + "/{relation}", gateway.related),
+        (nested + "/bulk-data", gateway.bulk_categories),
+        (nested + "/bulk-data/{category}", gateway.bulk_descriptors),
+        (nested + "/bulk-data/{category}/{file_id}", gateway.bulk_download),
     ]
     routes = [Route(API + path, _read_only(fn), methods=ALL_METHODS) for path, fn in table]
 
     async def gateway_error(request: Request, exc: Exception) -> Response:
         assert isinstance(exc, GatewayError)
-        headers = {"Allow": "GET, HEAD"} if exc.status == 405 else None
-        return _json(exc.status, error_body(exc), headers)
+        status = error_status(exc)
+        headers = {"Allow": "GET, HEAD"} if status == 405 else None
+        return _json(status, error_body(exc), headers)
 
     async def http_error(request: Request, exc: Exception) -> Response:
         assert isinstance(exc, HTTPException)
         if exc.status_code == 405:
-            err = method_not_allowed(request.method, request.url.path)
-        else:
-            err = unknown_route(request.url.path)
-        return _json(err.status, error_body(err))
+            return await gateway_error(request, method_not_allowed(request.method, ""))
+        return await gateway_error(request, _unknown_route(request))
 
     async def internal_error(request: Request, exc: Exception) -> Response:
-        err = GatewayError(500, "internal-error", "The server could not answer this request")
+        err = GatewayError(500, ERR_INTERNAL_ERROR, "The server could not answer this request")
         return _json(500, error_body(err))
 
     middleware = []

@@ -6,10 +6,18 @@ following health_handlers.cpp, discovery_handlers.cpp and handler_context.cpp at
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from medkit_replay.gateway.entities import SINGULAR, Entities, Entity, Kind, validate_entity_id
+from medkit_replay.gateway.errors import (
+    ERR_ENTITY_NOT_FOUND,
+    TYPE_NAMES,
+    GatewayError,
+    check_entity_id,
+    entity_not_found,
+    invalid_parameter,
+    wrong_entity_type,
+)
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -101,59 +109,42 @@ def health_body(timestamp_ns: int) -> Body:
 # -- refusals ------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Refusal:
-    """An error answer the handlers give (a GenericError body with this status)."""
-
-    status: int
-    error_code: str
-    message: str
-    parameters: dict[str, object]
-
-
-_TYPE_NAME: dict[Kind, str] = {
-    "areas": "Area",
-    "components": "Component",
-    "apps": "App",
-    "functions": "Function",
-}
-
-
-def route_entity(entities: Entities, kind: Kind, entity_id: str) -> Entity | Refusal:
+def route_entity(entities: Entities, kind: Kind, entity_id: str) -> Entity:
     """The entity a ``/{kind}/{id}...`` route addresses, refused as validate_entity_for_route
-    refuses (handler_context.cpp): a bad id 400, an id of another kind 400, none 404."""
-    problem = validate_entity_id(entity_id)
-    if problem is not None:
-        parameters: dict[str, object] = {"details": problem, "entity_id": entity_id}
-        return Refusal(400, "invalid-parameter", "Invalid entity ID", parameters)
+    refuses (handler_context.cpp): a bad id 400, an id of another kind 400, none 404.
+
+    Raises:
+        GatewayError: the refusal.
+    """
+    check_entity_id(entity_id)
     entity = entities.get(kind, entity_id)
     if entity is not None:
         return entity
     actual = entities.kind_of(entity_id)
     if actual is not None:
-        expected, got = _TYPE_NAME[kind], _TYPE_NAME[actual]
-        parameters = {"entity_id": entity_id, "expected_type": expected, "actual_type": got}
-        message = f"Invalid entity type for route: expected {expected}, got {got}"
-        return Refusal(400, "invalid-parameter", message, parameters)
-    return Refusal(404, "entity-not-found", "Entity not found", {"entity_id": entity_id})
+        raise wrong_entity_type(entity_id, kind, actual)
+    raise entity_not_found(entity_id)
 
 
-def relation_owner(entities: Entities, kind: Kind, entity_id: str) -> Entity | Refusal:
+def relation_owner(entities: Entities, kind: Kind, entity_id: str) -> Entity:
     """The entity whose relationship sub-collection is asked for. Apps' go through
     route_entity; areas', components' and functions' validate the id and look only in
-    their own collection (``Invalid area ID`` 400, ``Area not found`` 404)."""
+    their own collection (``Invalid area ID`` 400, ``Area not found`` 404).
+
+    Raises:
+        GatewayError: the refusal.
+    """
     if kind == "apps":
         return route_entity(entities, kind, entity_id)
     singular = SINGULAR[kind]
     id_key = f"{singular}_id"
     problem = validate_entity_id(entity_id)
     if problem is not None:
-        parameters: dict[str, object] = {"details": problem, id_key: entity_id}
-        return Refusal(400, "invalid-parameter", f"Invalid {singular} ID", parameters)
+        raise invalid_parameter(f"Invalid {singular} ID", {"details": problem, id_key: entity_id})
     entity = entities.get(kind, entity_id)
     if entity is None:
-        message = f"{_TYPE_NAME[kind]} not found"
-        return Refusal(404, "entity-not-found", message, {id_key: entity_id})
+        message = f"{TYPE_NAMES[kind]} not found"
+        raise GatewayError(404, ERR_ENTITY_NOT_FOUND, message, {id_key: entity_id})
     return entity
 
 

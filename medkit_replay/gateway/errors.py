@@ -11,6 +11,8 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING
 
+from medkit_replay.gateway.entities import validate_entity_id
+
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
@@ -25,7 +27,6 @@ ERR_PAYLOAD_TOO_LARGE = "payload-too-large"
 ERR_VENDOR_ERROR = "vendor-error"
 
 _VENDOR_PREFIX = "x-medkit-"
-_ENTITY_ID_MAX = 256
 
 ID_FIELDS: Mapping[str, str] = {
     "areas": "area_id",
@@ -108,26 +109,9 @@ def method_not_allowed(method: str, path: str) -> GatewayError:
 
 def check_entity_id(entity_id: str) -> None:
     """Raise the 400 upstream answers for a malformed entity id (validate_entity_for_route)."""
-    reason = _entity_id_error(entity_id)
+    reason = validate_entity_id(entity_id)
     if reason is not None:
         raise invalid_parameter("Invalid entity ID", {"details": reason, "entity_id": entity_id})
-
-
-def _entity_id_error(entity_id: str) -> str | None:
-    raw = entity_id.encode("utf-8", "surrogateescape")
-    if not raw:
-        return "Entity ID cannot be empty"
-    if len(raw) > _ENTITY_ID_MAX:
-        return f"Entity ID too long (max {_ENTITY_ID_MAX} characters)"
-    for byte in raw:
-        char = chr(byte)
-        if not ((char.isascii() and char.isalnum()) or char in "_-"):
-            shown = char if 32 <= byte <= 126 else f"0x{byte:02x}"
-            return (
-                f"Entity ID contains invalid character: '{shown}'. "
-                "Only alphanumeric, underscore and hyphen are allowed"
-            )
-    return None
 
 
 def entity_not_found(entity_id: str) -> GatewayError:

@@ -11,12 +11,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from medkit_replay.gateway.entities import discover
+from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
     from medkit_replay.evidence.graph import NodeGraph
     from medkit_replay.gateway.entities import Entities
     from medkit_replay.history import FaultHistory
-    from medkit_replay.model import EvidenceRecording, SnapshotCapture
+    from medkit_replay.model import SnapshotCapture
     from medkit_replay.result import Result
 
 NS_PER_SEC = 1_000_000_000
@@ -38,7 +39,10 @@ class ServedRecording:
     end_ns: int
     clips: dict[str, Path]
     default_at_ns: int | None = None
-    correlation_enabled: bool = False
+    rosbag_format: str = "mcap"
+    bag_sizes: dict[str, int] = dataclasses.field(default_factory=dict)
+    max_code_length: int = 256
+    node_to_app: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def moment(self, seconds: float | None) -> int:
         """Bag time of ``seconds`` from the start; None: ``--at``, else the end.
@@ -57,15 +61,6 @@ class ServedRecording:
             c
             for c in self.result.snapshots
             if c.fault_code == code and c.t_ns <= t_ns and c.retained
-        ]
-
-    def recordings_at(self, t_ns: int) -> list[EvidenceRecording]:
-        """The black-box recordings the manager holds at ``t_ns``: finished by then (its
-        post-roll over) and not yet deleted."""
-        return [
-            r
-            for r in self.result.recordings
-            if r.end_ns <= t_ns and (r.deleted_ns is None or r.deleted_ns > t_ns)
         ]
 
     def recording_facts(self) -> dict[str, object]:
@@ -100,7 +95,8 @@ class ServedRecording:
         }
 
 
-_STORAGE_SUFFIXES = (".mcap", ".db3")
+_FORMATS = {".mcap": "mcap", ".db3": "sqlite3"}
+_STORAGE_SUFFIXES = tuple(_FORMATS)
 
 
 def served_recording(
@@ -123,23 +119,28 @@ def served_recording(
     for fault in result.faults:
         names.update(fault.reporting_sources)
     clips: dict[str, Path] = {}
+    sizes: dict[str, int] = {}
     for recording in result.recordings:
         if recording.path is not None:
-            files = sorted(
-                p for p in Path(recording.path).iterdir() if p.suffix in _STORAGE_SUFFIXES
-            )
+            folder = [p for p in Path(recording.path).iterdir() if p.is_file()]
+            files = sorted(p for p in folder if p.suffix in _STORAGE_SUFFIXES)
             if len(files) == 1:
                 clips[recording.recording_id] = files[0]
-    fault_manager = result.config.get("fault_manager")
-    correlation = fault_manager.get("correlation") if isinstance(fault_manager, dict) else None
+                # The gateway's size_bytes: the bag folder's files on disk.
+                sizes[recording.recording_id] = sum(p.stat().st_size for p in folder)
+    formats = {_FORMATS[p.suffix] for p in clips.values()}
+    entities = discover(sorted(names), graph)
     served = ServedRecording(
         result=result,
         history=history,
-        entities=discover(sorted(names), graph),
+        entities=entities,
         origin_ns=origin,
         end_ns=end,
         clips=clips,
-        correlation_enabled=isinstance(correlation, dict) and bool(correlation.get("enabled")),
+        rosbag_format=formats.pop() if len(formats) == 1 else "mcap",
+        bag_sizes=sizes,
+        max_code_length=release_named(result.upstream_release).max_fault_code_length,
+        node_to_app={a.fqn: a.id for a in entities.list("apps") if a.fqn},
     )
     if at_sec is not None:
         return dataclasses.replace(served, default_at_ns=served.moment(at_sec))

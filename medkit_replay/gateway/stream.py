@@ -16,25 +16,21 @@ from typing import TYPE_CHECKING
 
 from starlette.responses import StreamingResponse
 
-from medkit_replay.gateway.errors import GatewayError
-from medkit_replay.gateway.faults_json import sse_event
+from medkit_replay.gateway.errors import ERR_SERVICE_UNAVAILABLE, GatewayError
+from medkit_replay.gateway.stream_json import (
+    KEEPALIVE,
+    KEEPALIVE_INTERVAL_SEC,
+    event_app_id,
+    parse_last_event_id,
+    sse_event,
+)
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator
 
     from medkit_replay.gateway.recording import ServedRecording
 
-KEEPALIVE_SEC = 30.0
-"""Seconds without an event before a keep-alive comment (upstream's kKeepaliveIntervalSec)."""
-KEEPALIVE = ":keepalive\n\n"
 NS_PER_SEC = 1_000_000_000
-
-
-def last_event_id(header: str | None, newest: int) -> int:
-    """The id a client has seen: digits only, anything else is 0; never above ``newest``."""
-    if not header or not header.isascii() or not header.isdigit():
-        return 0
-    return min(int(header), newest)
 
 
 class EventStream:
@@ -42,6 +38,8 @@ class EventStream:
 
     def __init__(self, served: ServedRecording, *, speed: float, max_clients: int) -> None:
         self.events = served.result.events
+        self.apps = {a.id for a in served.entities.list("apps")}
+        self.node_to_app = served.node_to_app
         self.times = [event.t_ns for event in self.events]
         self.speed = speed
         self.max_clients = max_clients
@@ -53,10 +51,10 @@ class EventStream:
         if self.open >= self.max_clients:
             raise GatewayError(
                 503,
-                "service-unavailable",
+                ERR_SERVICE_UNAVAILABLE,
                 "Maximum number of SSE clients reached. Please try again later.",
             )
-        first = last_event_id(header, len(self.events))
+        first = parse_last_event_id(header, len(self.events))
         if first == 0 and start_ns is not None:
             first = bisect_left(self.times, start_ns)
         self.open += 1
@@ -79,9 +77,11 @@ class EventStream:
                 if speed > 0:
                     due = started + (times[index] - origin_ns) / NS_PER_SEC / speed
                     while (wait := due - time.monotonic()) > 0:
-                        await asyncio.sleep(min(wait, KEEPALIVE_SEC))
+                        await asyncio.sleep(min(wait, KEEPALIVE_INTERVAL_SEC))
                         if due - time.monotonic() > 0:
                             yield KEEPALIVE
-                yield sse_event(events[index], index + 1)
+                event = events[index]
+                app = event_app_id(event.fault, self.apps, self.node_to_app)
+                yield sse_event(event, index + 1, app_id=app)
         finally:
             self.open -= 1

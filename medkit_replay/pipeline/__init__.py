@@ -46,12 +46,12 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
     from medkit_replay.bridges.base import ReportSink
+    from medkit_replay.history import FaultHistory
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.remote_store import Tally
     from medkit_replay.model import InputSummary, Loss
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.routing import Handler
-    from medkit_replay.history import FaultHistory
     from medkit_replay.pipeline.tracing import Tracer
     from medkit_replay.result import Consumption, Result
     from medkit_replay.trace import FaultTrace

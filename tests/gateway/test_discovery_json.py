@@ -4,13 +4,13 @@ health, entity lists, details, relationship collections, and the lookups' refusa
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
 from medkit_replay.gateway.discovery_json import (
     RELATIONS,
     SERVED_ROUTES,
-    Refusal,
     detail_body,
     health_body,
     list_body,
@@ -21,7 +21,11 @@ from medkit_replay.gateway.discovery_json import (
     version_info_body,
 )
 from medkit_replay.gateway.entities import Entities, Entity, discover
+from medkit_replay.gateway.errors import GatewayError
 from medkit_replay.version import __version__
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 NODES = ("/bt_navigator", "/nav/controller", "/nav/planner", "/_daemon")
 
@@ -509,10 +513,17 @@ def test_every_advertised_capability_is_a_served_route() -> None:
                     assert any(re.fullmatch(t, path) for t in templates), path
 
 
+def refused(look: Callable[..., object], *args: Any) -> tuple[object, ...]:
+    with pytest.raises(GatewayError) as caught:
+        look(*args)
+    err = caught.value
+    return (err.status, err.error_code, err.message, err.parameters)
+
+
 def test_routes_refuse_bad_ids_other_kinds_and_unknown_entities() -> None:
     entities = robot()
     assert route_entity(entities, "apps", "planner") == entity(entities, "apps", "planner")
-    assert route_entity(entities, "apps", "a/b") == Refusal(
+    assert refused(route_entity, entities, "apps", "a/b") == (
         400,
         "invalid-parameter",
         "Invalid entity ID",
@@ -522,42 +533,56 @@ def test_routes_refuse_bad_ids_other_kinds_and_unknown_entities() -> None:
             "entity_id": "a/b",
         },
     )
-    assert route_entity(entities, "functions", "robot-1") == Refusal(
+    assert refused(route_entity, entities, "functions", "robot-1") == (
         400,
         "invalid-parameter",
         "Invalid entity type for route: expected Function, got Component",
         {"entity_id": "robot-1", "expected_type": "Function", "actual_type": "Component"},
     )
-    assert route_entity(entities, "areas", "nav") == Refusal(
+    assert refused(route_entity, entities, "areas", "nav") == (
         400,
         "invalid-parameter",
         "Invalid entity type for route: expected Area, got Function",
         {"entity_id": "nav", "expected_type": "Area", "actual_type": "Function"},
     )
-    assert route_entity(entities, "apps", "ghost") == Refusal(
-        404, "entity-not-found", "Entity not found", {"entity_id": "ghost"}
+    assert refused(route_entity, entities, "apps", "ghost") == (
+        404,
+        "entity-not-found",
+        "Entity not found",
+        {"entity_id": "ghost"},
     )
     # an internal node is not an app, whatever a function's hosts say
-    assert route_entity(entities, "apps", "_daemon") == Refusal(
-        404, "entity-not-found", "Entity not found", {"entity_id": "_daemon"}
+    assert refused(route_entity, entities, "apps", "_daemon") == (
+        404,
+        "entity-not-found",
+        "Entity not found",
+        {"entity_id": "_daemon"},
     )
 
 
 def test_relationship_owners_are_looked_up_as_each_handler_does() -> None:
     entities = robot()
-    assert relation_owner(entities, "areas", "") == Refusal(
+    assert refused(relation_owner, entities, "areas", "") == (
         400,
         "invalid-parameter",
         "Invalid area ID",
         {"details": "Entity ID cannot be empty", "area_id": ""},
     )
     # no wrong-kind check here: a function id under /components is simply not found
-    assert relation_owner(entities, "components", "nav") == Refusal(
-        404, "entity-not-found", "Component not found", {"component_id": "nav"}
+    assert refused(relation_owner, entities, "components", "nav") == (
+        404,
+        "entity-not-found",
+        "Component not found",
+        {"component_id": "nav"},
     )
-    assert relation_owner(entities, "functions", "ghost") == Refusal(
-        404, "entity-not-found", "Function not found", {"function_id": "ghost"}
+    assert refused(relation_owner, entities, "functions", "ghost") == (
+        404,
+        "entity-not-found",
+        "Function not found",
+        {"function_id": "ghost"},
     )
     assert relation_owner(entities, "functions", "nav") == entity(entities, "functions", "nav")
     # apps validate as their detail route does
-    assert relation_owner(entities, "apps", "nav") == route_entity(entities, "apps", "nav")
+    assert refused(relation_owner, entities, "apps", "nav") == refused(
+        route_entity, entities, "apps", "nav"
+    )

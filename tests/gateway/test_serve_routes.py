@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
+import http.client
 import json
 from typing import TYPE_CHECKING
 
 import pytest
-from starlette.testclient import TestClient
 
 from medkit_replay.gateway.app import build_app
 from tests.gateway.schemas import response_schema, validate
-from tests.gateway.support import MISSION, NAV2, seconds, serve_replay
+from tests.gateway.support import MISSION, NAV2, running, seconds, serve_replay
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+
+    import httpx
 
     from medkit_replay.gateway.recording import ServedRecording
 
@@ -26,24 +28,26 @@ def served() -> ServedRecording:
 
 
 @pytest.fixture(scope="module")
-def client(served: ServedRecording) -> Iterator[TestClient]:
-    with TestClient(build_app(served, speed=0), base_url="http://127.0.0.1:8080") as client:
+def client(served: ServedRecording) -> Iterator[httpx.Client]:
+    with running(build_app(served, speed=0)) as client:
         yield client
 
 
-def checked(client: TestClient, path: str, template: str | None = None) -> object:
+def checked(client: httpx.Client, path: str, template: str | None = None) -> object:
     """GET ``path``: 200, JSON, and valid against the published schema of its route."""
     answer = client.get(path)
     assert answer.status_code == 200, (path, answer.text)
     assert answer.headers["content-type"].startswith("application/json")
     body = answer.json()
-    schema = response_schema(template or path.split("?")[0], "get", "200")
+    schema = response_schema(template or path.split("?", maxsplit=1)[0], "get", "200")
     assert schema is not None, f"no published schema for {template or path}"
     validate(body, schema)
     return body
 
 
-def test_root_version_health_and_the_recording(client: TestClient, served: ServedRecording) -> None:
+def test_root_version_health_and_the_recording(
+    client: httpx.Client, served: ServedRecording
+) -> None:
     checked(client, "/api/v1/", "/")
     checked(client, "/api/v1/version-info", "/version-info")
     checked(client, "/api/v1/health", "/health")
@@ -53,7 +57,7 @@ def test_root_version_health_and_the_recording(client: TestClient, served: Serve
     assert [i["path"] for i in facts["inputs"]] == [str(MISSION)]
 
 
-def test_every_entity_and_its_faults_have_the_published_shapes(client: TestClient) -> None:
+def test_every_entity_and_its_faults_have_the_published_shapes(client: httpx.Client) -> None:
     seen = 0
     for kind in KINDS:
         listing = checked(client, f"/api/v1/{kind}", f"/{kind}")
@@ -62,7 +66,9 @@ def test_every_entity_and_its_faults_have_the_published_shapes(client: TestClien
             entity = f"/api/v1/{kind}/{item['id']}"
             singular = kind[:-1]
             checked(client, entity, f"/{kind}/{{{singular}_id}}")
-            faults = checked(client, f"{entity}/faults?status=all", f"/{kind}/{{{singular}_id}}/faults")
+            faults = checked(
+                client, f"{entity}/faults?status=all", f"/{kind}/{{{singular}_id}}/faults"
+            )
             assert isinstance(faults, dict)
             for fault in faults["items"]:
                 checked(
@@ -74,7 +80,9 @@ def test_every_entity_and_its_faults_have_the_published_shapes(client: TestClien
     assert seen  # the mission's reporting sources are entities whose faults are listed
 
 
-def test_the_global_list_at_the_end_is_the_report(client: TestClient, served: ServedRecording) -> None:
+def test_the_global_list_at_the_end_is_the_report(
+    client: httpx.Client, served: ServedRecording
+) -> None:
     body = checked(client, "/api/v1/faults?status=all", "/faults")
     assert isinstance(body, dict)
     muted = {m.fault_code for m in served.result.muted_faults}
@@ -87,7 +95,7 @@ def test_the_global_list_at_the_end_is_the_report(client: TestClient, served: Se
 
 
 def test_any_moment_answers_the_state_the_transitions_left(
-    client: TestClient, served: ServedRecording
+    client: httpx.Client, served: ServedRecording
 ) -> None:
     last: dict[tuple[str, int], str] = {}
     for transition in served.result.transitions:
@@ -112,7 +120,7 @@ def test_any_moment_answers_the_state_the_transitions_left(
 
 
 def test_the_detail_at_a_moment_is_that_moment_s_fault(
-    client: TestClient, served: ServedRecording
+    client: httpx.Client, served: ServedRecording
 ) -> None:
     transition = next(t for t in served.result.transitions if t.from_status is not None)
     history = served.history
@@ -132,7 +140,7 @@ def test_the_detail_at_a_moment_is_that_moment_s_fault(
     assert body["x-medkit"]["occurrence_count"] == fault.occurrence_count
 
 
-def test_unknown_things_answer_404_with_a_generic_error(client: TestClient) -> None:
+def test_unknown_things_answer_404_with_a_generic_error(client: httpx.Client) -> None:
     app = client.get("/api/v1/apps").json()["items"][0]["id"]
     for path in (
         "/api/v1/apps/no_such_app",
@@ -149,7 +157,7 @@ def test_unknown_things_answer_404_with_a_generic_error(client: TestClient) -> N
         validate(answer.json(), "GenericError")
 
 
-def test_writes_answer_405_with_a_generic_error(client: TestClient) -> None:
+def test_writes_answer_405_with_a_generic_error(client: httpx.Client) -> None:
     app = client.get("/api/v1/apps").json()["items"][0]["id"]
     for method, path in (
         ("DELETE", "/api/v1/faults"),
@@ -165,7 +173,7 @@ def test_writes_answer_405_with_a_generic_error(client: TestClient) -> None:
         assert answer.headers["allow"] == "GET, HEAD"
 
 
-def test_bad_parameters_answer_400(client: TestClient) -> None:
+def test_bad_parameters_answer_400(client: httpx.Client) -> None:
     for path in (
         "/api/v1/faults?status=bogus",
         "/api/v1/faults?at=soon",
@@ -177,12 +185,36 @@ def test_bad_parameters_answer_400(client: TestClient) -> None:
         validate(answer.json(), "GenericError")
 
 
-def test_no_route_reaches_the_file_system(client: TestClient) -> None:
+def raw_get(client: httpx.Client, path: str) -> tuple[int, bytes]:
+    """GET ``path`` exactly as written (httpx would fold ``..`` segments before sending)."""
+    connection = http.client.HTTPConnection(client.base_url.host, client.base_url.port)
+    try:
+        connection.request("GET", path)
+        answer = connection.getresponse()
+        return answer.status, answer.read()
+    finally:
+        connection.close()
+
+
+def test_no_route_reaches_the_file_system(client: httpx.Client) -> None:
     app = client.get("/api/v1/apps").json()["items"][0]["id"]
-    for file_id in ("..%2F..%2F..%2Fetc%2Fpasswd", "%2Fetc%2Fpasswd", "..", "metadata.yaml"):
-        answer = client.get(f"/api/v1/apps/{app}/bulk-data/rosbags/{file_id}")
-        assert answer.status_code == 404, file_id
-        assert "root:" not in answer.text
+    base = f"/api/v1/apps/{app}/bulk-data/rosbags/"
+    for file_id in (
+        "..%2F..%2F..%2F..%2Fetc%2Fpasswd",
+        "%2Fetc%2Fpasswd",
+        "..%5C..%5Cwindows",
+        "%2e%2e",
+        "metadata.yaml",
+        "fault_X_1%00.mcap",
+    ):
+        status, body = raw_get(client, base + file_id)
+        assert status == 404, file_id
+        validate(json.loads(body), "GenericError")
+        assert b"root:" not in body
+    # Dot segments written out reach no file either: the route they leave is another route.
+    for path in (base + "../../../../../../etc/passwd", base + "..", "/api/v1/../../etc/passwd"):
+        status, body = raw_get(client, path)
+        assert b"root:" not in body and status in (200, 404), path
 
 
 def sse_frames(text: str) -> list[dict[str, str]]:
@@ -200,7 +232,7 @@ def sse_frames(text: str) -> list[dict[str, str]]:
 
 
 def test_the_stream_is_the_report_s_events_in_order(
-    client: TestClient, served: ServedRecording
+    client: httpx.Client, served: ServedRecording
 ) -> None:
     answer = client.get("/api/v1/faults/stream")
     assert answer.status_code == 200
@@ -214,12 +246,19 @@ def test_the_stream_is_the_report_s_events_in_order(
         assert data["fault"]["fault_code"] == event.fault.fault_code
 
 
-def test_the_stream_resumes_after_last_event_id(client: TestClient, served: ServedRecording) -> None:
+def test_the_stream_resumes_after_last_event_id(
+    client: httpx.Client, served: ServedRecording
+) -> None:
     total = len(served.result.events)
     resumed = sse_frames(client.get("/api/v1/faults/stream", headers={"Last-Event-ID": "5"}).text)
     assert [int(f["id"]) for f in resumed] == list(range(6, total + 1))
     for junk in ("-1", "abc", "5x", ""):
-        frames = sse_frames(client.get("/api/v1/faults/stream", headers={"Last-Event-ID": junk}).text)
+        frames = sse_frames(
+            client.get("/api/v1/faults/stream", headers={"Last-Event-ID": junk}).text
+        )
         assert int(frames[0]["id"]) == 1, junk
-    beyond = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(10**30)})
-    assert sse_frames(beyond.text) == []
+    beyond = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": "99999"})
+    assert sse_frames(beyond.text) == []  # above the newest id: clamped to it, nothing owed
+    # Out of uint64's range the gateway's parse gives 0: everything again.
+    huge = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(10**30)})
+    assert int(sse_frames(huge.text)[0]["id"]) == 1
