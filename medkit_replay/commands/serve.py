@@ -23,8 +23,8 @@ from medkit_replay.errors import MedkitReplayError
 if TYPE_CHECKING:
     from medkit_replay.gateway.recording import ServedRecording
 
-MAX_REQUEST_BYTES = 64 * 1024
-"""The largest request line and headers the server reads (every route is a GET)."""
+MAX_REQUEST_BYTES = 16 * 1024
+"""h11's bound on a request still arriving (the app refuses a larger complete one, 431)."""
 
 
 def _finite(_ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -124,6 +124,7 @@ def serve(
         config = uvicorn.Config(
             app,
             log_level="warning",
+            http="h11",  # the request bound below is h11's (httptools would ignore it)
             h11_max_incomplete_event_size=MAX_REQUEST_BYTES,
             timeout_graceful_shutdown=1,
             lifespan="off",

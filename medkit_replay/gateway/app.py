@@ -63,6 +63,8 @@ READ_METHODS = frozenset({"GET", "HEAD"})
 ALL_METHODS = ["GET", "HEAD", "POST", "PUT", "PATCH", "DELETE"]
 MAX_RESPONSE_BYTES = 256 * 1024 * 1024
 """The largest JSON body answered (a fault list of this size means something is wrong)."""
+MAX_REQUEST_HEAD_BYTES = 16 * 1024
+"""The largest request line and headers answered (431 beyond); every route is a GET."""
 MOMENT_PREFIX = "/at/"
 ROSBAG_CATEGORY = "rosbags"
 SUB_ENTITIES = {"areas": "subareas", "components": "subcomponents"}
@@ -312,6 +314,13 @@ def _read_only(
     handler: Callable[[Request], Awaitable[Response]],
 ) -> Callable[[Request], Awaitable[Response]]:
     async def endpoint(request: Request) -> Response:
+        head = len(request.scope.get("raw_path") or b"") + len(request.scope["query_string"])
+        head += sum(len(name) + len(value) for name, value in request.scope["headers"])
+        if head > MAX_REQUEST_HEAD_BYTES:
+            raise GatewayError(
+                431, ERR_INVALID_REQUEST, "Request line and headers exceed the server's bound",
+                {"max_bytes": MAX_REQUEST_HEAD_BYTES},
+            )  # fmt: skip
         if request.method not in READ_METHODS:
             raise method_not_allowed(request.method, request.url.path[:256])
         length = request.headers.get("content-length", "0")
@@ -381,7 +390,7 @@ def build_app(
                 CORSMiddleware,
                 allow_origins=list(cors),
                 allow_methods=["GET", "HEAD"],
-                allow_headers=["Last-Event-ID", "Content-Type", "Authorization"],
+                allow_headers=["Accept", "Authorization", "Content-Type", "Last-Event-ID"],
             )
         )
     app = Starlette(

@@ -154,3 +154,38 @@ def test_a_clip_downloads_byte_for_byte_as_analyze_writes_it(
                 assert gone.status_code == 404
                 downloaded += 1
         assert downloaded >= len(held)
+
+
+def test_without_the_serve_extra_it_says_what_to_install() -> None:
+    # The web stack hidden, as on a machine with only `pip install medkit-replay`.
+    code = (
+        "import sys\n"
+        "sys.modules['uvicorn'] = None\n"
+        "from medkit_replay.cli import main\n"
+        f"sys.exit(main(['serve', {str(MISSION)!r}, '--quiet']))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], check=False, capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1
+    assert "pip install 'medkit-replay[serve]'" in done.stderr
+
+
+def test_a_clip_downloads_in_ranges(robot_served: tuple[ServedRecording, Path]) -> None:
+    served, _ = robot_served
+    recording = next(r for r in served.result.recordings if r.recording_id in served.clips)
+    whole = served.clips[recording.recording_id].read_bytes()
+    with running(build_app(served, speed=0)) as client:
+        apps = [a["id"] for a in client.get("/api/v1/apps").json()["items"]]
+        for app in apps:
+            path = f"/api/v1/apps/{app}/bulk-data/rosbags/{recording.recording_id}"
+            part = client.get(path, headers={"Range": "bytes=8-99"})
+            if part.status_code == 404:
+                continue
+            assert part.status_code == 206
+            assert part.content == whole[8:100]
+            assert part.headers["content-disposition"].endswith(
+                f'filename="{recording.recording_id}.mcap"'
+            )
+            break
+        else:
+            pytest.fail("no app lists the recording")

@@ -262,3 +262,58 @@ def test_the_stream_resumes_after_last_event_id(
     # Out of uint64's range the gateway's parse gives 0: everything again.
     huge = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(10**30)})
     assert int(sse_frames(huge.text)[0]["id"]) == 1
+
+
+def test_relationship_collections_have_the_published_shapes(client: httpx.Client) -> None:
+    from medkit_replay.gateway.discovery_json import RELATIONS  # noqa: PLC0415
+
+    seen = 0
+    for kind, relations in RELATIONS.items():
+        for item in client.get(f"/api/v1/{kind}").json()["items"]:
+            for relation in relations:
+                path = f"/api/v1/{kind}/{item['id']}/{relation}"
+                answer = client.get(path)
+                assert answer.status_code == 200, path
+                # belongs-to is the handler's, not in the document; is-located-on answers a
+                # collection (the handler) where the document says one entity.
+                validate(answer.json(), "EntityList")
+                seen += 1
+    assert seen
+
+
+def test_an_oversized_request_head_answers_431(client: httpx.Client) -> None:
+    answer = client.get("/api/v1/faults", headers={"X-Padding": "a" * 20_000})
+    assert answer.status_code == 431
+    validate(answer.json(), "GenericError")
+    long_query = client.get("/api/v1/faults?status=all&x=" + "b" * 20_000)
+    assert long_query.status_code == 431
+
+
+def test_the_recording_route_says_what_is_served(served: ServedRecording) -> None:
+    from tests.gateway.support import serve_replay  # noqa: PLC0415
+
+    at_ten = serve_replay([MISSION], [NAV2], at_sec=10.0)
+    with running(build_app(at_ten, speed=0)) as client:
+        facts = client.get("/api/v1/x-medkit/recording").json()
+        assert facts["default_at_sec"] == 10.0
+        assert facts["duration_sec"] == (served.end_ns - served.origin_ns) / 1e9
+        # Without a moment the answer is --at's, not the end's.
+        assert (
+            client.get("/api/v1/faults?status=all").json()
+            == client.get("/api/v1/faults?status=all&at=10").json()
+        )
+
+
+def test_streams_beyond_the_gateway_s_two_clients_answer_503(served: ServedRecording) -> None:
+    slow = build_app(served, speed=1e-6)  # the second event would come days later
+    with running(slow) as client, client.stream("GET", "/api/v1/faults/stream") as first:
+        assert first.status_code == 200
+        first_lines = first.iter_lines()
+        assert next(first_lines).startswith("id: 1")
+        with client.stream("GET", "/api/v1/faults/stream") as second:
+            assert second.status_code == 200
+            second_lines = second.iter_lines()  # kept: a dropped iterator closes the stream
+            assert next(second_lines).startswith("id: 1")
+            third = client.get("/api/v1/faults/stream", timeout=10)
+            assert third.status_code == 503
+            validate(third.json(), "GenericError")
