@@ -39,6 +39,9 @@ class FaultHistory:
     _keys: list[bytes] = field(default_factory=list)  # the codes' UTF-8, for the insert
     _correlation_times: list[int] = field(default_factory=list)
     _correlation: list[CorrelationState] = field(default_factory=list)
+    sources: set[str] = field(default_factory=set)
+    """Every reporting source and logging node the replay saw, as ROS node names (the entities
+    ``serve`` shows are made from them)."""
 
     # -- filling ---------------------------------------------------------------------------
 

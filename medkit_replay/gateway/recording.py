@@ -104,7 +104,8 @@ def served_recording(
 ) -> ServedRecording:
     """What ``serve`` answers from, once the replay (with ``history``) is done.
 
-    Entities come from the graph's nodes and every reporting source the replay saw; a clip is
+    Entities come from the graph's nodes, every reporting source the replay saw and the nodes
+    that logged on /rosout (when the log bridge reads it); a clip is
     served from the storage file inside the folder the replay wrote for it.
     """
     starts = [s.start_ns for s in result.inputs if s.start_ns is not None]
@@ -116,8 +117,7 @@ def served_recording(
     origin = min(starts, default=0)
     end = max(ends, default=origin)
     names: set[str] = set(graph.publishes) | set(graph.subscribes) if graph is not None else set()
-    for fault in result.faults:
-        names.update(fault.reporting_sources)
+    names.update(history.sources)
     clips: dict[str, Path] = {}
     sizes: dict[str, int] = {}
     for recording in result.recordings:

@@ -149,7 +149,7 @@ def replay(
     if history is not None:  # serve's index, loaded only for it
         from medkit_replay.pipeline.history import HistoryRecorder  # noqa: PLC0415
 
-        HistoryRecorder(history, manager)
+        HistoryRecorder(history, manager, router.log)
     tallies: dict[str, Tally] = {}  # bytes fetched from remote inputs, both passes
     run = replay_pass(
         paths,

@@ -13,17 +13,24 @@ from medkit_replay.history import CorrelationState
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+    from medkit_replay.bridges.base import ReportSink
+    from medkit_replay.bridges.log import LogBridge
     from medkit_replay.engine.manager import FaultManager, Row
     from medkit_replay.history import FaultHistory
     from medkit_replay.model import ClearRequest
+    from medkit_replay.pipeline.routing import Handler
 
 
 class HistoryRecorder:
     """Attach to the manager (after any tracer) before the replay runs."""
 
-    def __init__(self, history: FaultHistory, manager: FaultManager) -> None:
+    def __init__(
+        self, history: FaultHistory, manager: FaultManager, log: LogBridge | None = None
+    ) -> None:
         self.history = history
         self.manager = manager
+        if log is not None:  # the logging nodes, also those whose lines report nothing
+            log.feed = self._logged(log.feed)  # type: ignore[method-assign,assignment]
         report, event, transition = manager.report_row, manager.event_row, manager.transition_row
         manager.set_row_sinks(self._report(report), event, self._transition(transition))
         self._ticked, self._cleared = manager.cleanup_tick, manager.clear
@@ -45,8 +52,13 @@ class HistoryRecorder:
 
     def _report(self, inner: Callable[[Row], None]) -> Callable[[Row], None]:
         # (t_ns, origin, topic, code, event name, severity, description, source, accepted, ...)
+        sources = self.history.sources
+
         def sink(row: Row) -> None:
             inner(row)
+            source = row[7]
+            if isinstance(source, str):
+                sources.add(source)
             if row[8]:
                 t_ns, code = row[0], row[3]
                 assert isinstance(t_ns, int) and isinstance(code, str)
@@ -71,6 +83,18 @@ class HistoryRecorder:
         success = self._cleared(request)
         self._note_correlation(request.t_ns)
         return success
+
+    def _logged(self, feed: Handler) -> Handler:
+        sources = self.history.sources
+
+        def logged(t_ns: int, topic: str, msg: object, report: ReportSink) -> None:
+            name = getattr(msg, "name", "")
+            if isinstance(name, str) and name:
+                # A logger's name is its node's, namespace segments joined by dots.
+                sources.add("/" + name.replace(".", "/"))
+            feed(t_ns, topic, msg, report)
+
+        return logged
 
     def _cleanup_tick(self, now_ns: int) -> None:
         self._ticked(now_ns)

@@ -117,3 +117,21 @@ def test_a_replay_with_a_history_writes_the_same_report(
     result, _ = replayed
     plain = replay([MISSION], [NAV2])
     assert dumps(plain) == dumps(result)
+
+
+def test_the_nodes_seen_are_every_reporting_source_and_logging_node() -> None:
+    from rosbags.highlevel import AnyReader  # noqa: PLC0415
+    from rosbags.typesys import Stores, get_typestore  # noqa: PLC0415
+
+    history = FaultHistory()
+    bridges = ROOT / "rules" / "nav2" / "bridges.yaml"  # the log bridge on
+    result = replay([MISSION], [NAV2, bridges], history=history)
+    with AnyReader([MISSION], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        rosout = [c for c in reader.connections if c.topic == "/rosout"]
+        loggers = {
+            "/" + reader.deserialize(raw, c.msgtype).name.replace(".", "/")
+            for c, _, raw in reader.messages(connections=rosout)
+        }
+    reporters = {r.source_id for r in result.reports}
+    assert loggers - reporters  # nodes that logged without a report are seen too
+    assert history.sources == loggers | reporters
