@@ -14,6 +14,7 @@ from tests.gateway.support import MISSION, NAV2, running, seconds, serve_replay
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from pathlib import Path
 
     import httpx
 
@@ -317,3 +318,37 @@ def test_streams_beyond_the_gateway_s_two_clients_answer_503(served: ServedRecor
             third = client.get("/api/v1/faults/stream", timeout=10)
             assert third.status_code == 503
             validate(third.json(), "GenericError")
+
+
+def test_a_moment_in_the_base_url_starts_the_stream_there(
+    client: httpx.Client, served: ServedRecording
+) -> None:
+    events = list(served.result.events)
+    middle = events[len(events) // 2]
+    first_id = next(i for i, e in enumerate(events, 1) if e.t_ns >= middle.t_ns)
+    for path in (
+        f"/at/{seconds(served, middle.t_ns)}/api/v1/faults/stream",
+        f"/api/v1/faults/stream?at={seconds(served, middle.t_ns)}",
+    ):
+        frames = sse_frames(client.get(path).text)
+        assert [int(f["id"]) for f in frames] == list(range(first_id, len(events) + 1)), path
+
+
+def test_head_answers_like_get_without_a_body(client: httpx.Client) -> None:
+    got, head = client.get("/api/v1/faults"), client.head("/api/v1/faults")
+    assert head.status_code == 200 and head.content == b""
+    assert head.headers["content-length"] == got.headers["content-length"]
+
+
+def test_the_release_modelled_is_served(tmp_path: Path) -> None:
+    release = tmp_path / "release.yaml"
+    release.write_text('medkit_replay:\n  ros__parameters:\n    upstream_release: "0.6.0"\n')
+    old = serve_replay([MISSION], [NAV2, release])
+    assert old.max_code_length == 128  # the 0.6.0 manager's bound on a fault code
+    with running(build_app(old, speed=0)) as client:
+        assert client.get("/api/v1/x-medkit/recording").json()["upstream_release"] == "0.6.0"
+        app = client.get("/api/v1/apps").json()["items"][0]["id"]
+        # A code the 0.6.0 manager refuses: the gateway passes the manager's failure on (503).
+        answer = client.get(f"/api/v1/apps/{app}/faults/{'C' * 200}")
+        assert answer.status_code == 503
+        validate(answer.json(), "GenericError")
