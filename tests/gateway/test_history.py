@@ -129,7 +129,7 @@ def test_the_nodes_seen_are_every_reporting_source_and_logging_node() -> None:
     with AnyReader([MISSION], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         rosout = [c for c in reader.connections if c.topic == "/rosout"]
         loggers = {
-            "/" + reader.deserialize(raw, c.msgtype).name.replace(".", "/")
+            "/" + str(getattr(reader.deserialize(raw, c.msgtype), "name", "")).replace(".", "/")
             for c, _, raw in reader.messages(connections=rosout)
         }
     reporters = {r.source_id for r in result.reports}
