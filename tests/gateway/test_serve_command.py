@@ -189,3 +189,12 @@ def test_a_clip_downloads_in_ranges(robot_served: tuple[ServedRecording, Path]) 
             break
         else:
             pytest.fail("no app lists the recording")
+
+
+def test_clips_are_never_written_over_the_recording(capsys: pytest.CaptureFixture[str]) -> None:
+    inside = MISSION / "clips"
+    status = main(["serve", str(MISSION), "--evidence", str(inside), "--port", "0", "--quiet"])
+    assert status == 2
+    assert not inside.exists()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "clips" in err
