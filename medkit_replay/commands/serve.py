@@ -51,7 +51,13 @@ def _finite(_ctx: click.Context, param: click.Parameter, value: float | None) ->
     help="Write the black-box recordings here, as analyze does, and serve them as bulk data "
     "(by default they go to a temporary folder removed when the server stops).",
 )
-@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on.")
+@click.option(
+    "--host",
+    default="127.0.0.1",
+    show_default=True,
+    metavar="ADDRESS",
+    help="Address to listen on.",
+)
 @click.option(
     "--port", default=8080, show_default=True, type=click.IntRange(0, 65535),
     help="Port to listen on (0: any free port, printed).",
