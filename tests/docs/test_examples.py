@@ -9,11 +9,11 @@ before its block says otherwise (the convention is told in docs/about.md):
 - ``<!-- example: exits 0 1 -->``: each command's exit status, in order;
 - ``<!-- example: synopsis -->`` and ``<!-- example: output -->``: usage lines and printed text;
 - ``<!-- example: needs-server -->``, ``needs-network``, ``needs-cluster``: not run here. Their
-  own tests: serve in tests/gateway/ (tests/gateway/test_serve_cli.py and its neighbours drive a
-  real uvicorn), follow in tests/follow/, s3:// and gs:// and http(s):// inputs in
-  tests/inputs/test_remote.py, tests/inputs/test_remote_gcs.py and
+  own tests: serve in tests/gateway/test_serve_command.py and test_serve_routes.py (a real
+  uvicorn), follow in tests/follow/test_follow_cli.py (a recording written while followed),
+  s3://, gs:// and http(s):// inputs in tests/inputs/test_remote.py, test_remote_gcs.py and
   tests/fleet/test_remote_fleet.py (moto, fake-gcs-server and a Range server on 127.0.0.1),
-  Dask in tests/fleet/ (a local cluster).
+  Dask in tests/fleet/test_dask.py and tests/tuning/test_sweep_dask.py.
 """
 
 from __future__ import annotations
