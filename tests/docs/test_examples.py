@@ -1,10 +1,10 @@
-"""Every command example of README.md and docs/ runs, and exits as the docs say it does.
+"""Every command example of README.md, CONTRIBUTING.md and docs/ runs, and exits as they say.
 
 A line starting with ``medkit-replay `` (or ``$ medkit-replay ``) inside a fenced code block is
 an example. It runs from one scratch folder that holds the sample recordings, rules and examples
 (``REAL``) and the small files the examples name (``FIXTURES``), in document order (README.md,
-then docs/ by path), each distinct command once. It must exit 0 unless an HTML comment right
-before its block says otherwise (the convention is told in docs/about.md):
+CONTRIBUTING.md, then docs/ by path), each distinct command once. It must exit 0 unless an HTML
+comment right before its block says otherwise (the convention is told in docs/about.md):
 
 - ``<!-- example: exits 0 1 -->``: each command's exit status, in order;
 - ``<!-- example: synopsis -->`` and ``<!-- example: output -->``: usage lines and printed text;
@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterator
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+PAGES = [ROOT / "README.md", ROOT / "CONTRIBUTING.md", *sorted((ROOT / "docs").rglob("*.md"))]
 SKIPPED = {"synopsis", "output"}
 NEEDS = {
     "needs-server": "needs a server or a recording being written",
