@@ -352,8 +352,8 @@ def test_example_budget_is_exceeded_on_the_sample_bag(
 def test_readme_budget_holds_on_the_sample_bag(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    block = readme.split("## CI fault budgets", 1)[1].split("```yaml\n", 1)[1].split("```", 1)[0]
+    page = (ROOT / "docs" / "commands" / "check.md").read_text(encoding="utf-8")
+    block = page.split("```yaml\n", 1)[1].split("```", 1)[0]
     budget = tmp_path / "readme.yaml"
     budget.write_text(block, encoding="utf-8")
     status, out, _ = run(["check", str(SAMPLE), "--budget", str(budget), *SAMPLE_CONFIG], capsys)

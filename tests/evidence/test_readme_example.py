@@ -1,4 +1,4 @@
-"""The README's evidence example prints what the README shows."""
+"""The evidence example of docs/evidence.md prints what the page shows."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ def test_the_readme_shows_the_real_summary(
     assert main(argv) == 0
     out = capsys.readouterr().out
     printed = out[out.index("Evidence:") :].rstrip("\n")
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    readme = (ROOT / "docs" / "evidence.md").read_text(encoding="utf-8")
     shown = readme.split("The summary ends with:\n\n```\n", 1)[1].split("\n```", 1)[0]
     assert printed == shown
     assert len(list((tmp_path / "clips").iterdir())) == 8

@@ -135,8 +135,7 @@ def test_the_readme_shows_real_output(
 ) -> None:
     monkeypatch.delenv("COLUMNS", raising=False)
     monkeypatch.chdir(ROOT)
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = readme.split("## Explaining one fault", 1)[1]
+    section = (ROOT / "docs" / "commands" / "explain.md").read_text(encoding="utf-8")
     example = section.split("```\nmedkit-replay explain sample_bags", 1)[1]
     command, shown = ("sample_bags" + example).split("```\n\n```\n", 1)
     shown = shown.split("\n```", 1)[0] + "\n"

@@ -155,8 +155,8 @@ def test_default_out_folder(
 
 
 def test_sample_bags_with_budget(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """The README's example: the mission passes the budget, the service-call recording
-    (BATTERY_LOW confirms) does not: exit 1."""
+    """The example of the README and docs/commands/fleet.md: the mission passes the budget, the
+    service-call recording (BATTERY_LOW confirms) does not: exit 1."""
     status, out, _ = run(
         [
             "fleet",

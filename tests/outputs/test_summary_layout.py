@@ -327,9 +327,10 @@ def test_severity_names_beside_rows(tmp_path: Path) -> None:
 def test_the_readme_shows_the_real_summary(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """README's "What you see" block is the start of what its first command prints."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = readme[readme.index("### What you see") :]
+    """docs/commands/analyze.md's "What you see" block is the start of what the README's first
+    command prints."""
+    readme = (ROOT / "docs" / "commands" / "analyze.md").read_text(encoding="utf-8")
+    section = readme[readme.index("## What you see") :]
     block = section[section.index("```\n") + 4 : section.index("\n```", section.index("```\n"))]
     shown = block.splitlines()
     assert shown[-1] == "..."

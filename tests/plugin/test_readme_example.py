@@ -1,4 +1,4 @@
-"""The README's regression test of the recorded mission, run exactly as the README shows it."""
+"""The regression test of the recorded mission in docs/pytest.md, run exactly as shown there."""
 
 from __future__ import annotations
 
@@ -17,11 +17,11 @@ FIRST_LINE = "# tests/test_nav2_mission.py"
 
 
 def readme_example() -> str:
-    """The README's Python code block that starts with ``# tests/test_nav2_mission.py``."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    """docs/pytest.md's Python code block that starts with ``# tests/test_nav2_mission.py``."""
+    readme = (ROOT / "docs" / "pytest.md").read_text(encoding="utf-8")
     pattern = re.compile(r"^```python\n(.*?)^```$", flags=re.MULTILINE | re.DOTALL)
     found = [m.group(1) for m in pattern.finditer(readme) if m.group(1).startswith(FIRST_LINE)]
-    assert len(found) == 1, f"README.md: one python block starting with {FIRST_LINE!r} expected"
+    assert len(found) == 1, f"docs/pytest.md: one python block starting with {FIRST_LINE!r}"
     return found[0]
 
 
@@ -34,7 +34,7 @@ def test_the_readme_regression_test_runs_as_shown(pytester: pytest.Pytester) -> 
     (tests / "test_nav2_mission.py").write_text(readme_example(), encoding="utf-8")
     golden = tests / "goldens" / "test_nav2_mission" / "test_the_whole_report_is_unchanged.json"
 
-    # as the README says: once with --update-golden, then in CI without
+    # as docs/pytest.md says: once with --update-golden, then in CI without
     first = pytester.runpytest("tests", "--update-golden")
     first.assert_outcomes(passed=3)
     first.stdout.fnmatch_lines(["*medkit-replay golden reports written*", str(golden)])
@@ -58,8 +58,8 @@ def test_the_readme_regression_test_runs_as_shown(pytester: pytest.Pytester) -> 
 
 
 def test_the_readme_failure_example_is_what_a_failure_shows(pytester: pytest.Pytester) -> None:
-    """The README's sample failure output is the real one (for a window of 75 to 76 s)."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    """docs/pytest.md's sample failure output is the real one (for a window of 75 to 76 s)."""
+    readme = (ROOT / "docs" / "pytest.md").read_text(encoding="utf-8")
     shown = re.search(
         r"^```\n(E +AssertionError: expected MOTOR_LEFT_OVERHEAT.*?)^```$",
         readme,

@@ -1,4 +1,4 @@
-"""The README's "Tuning your fault manager" commands run as shown and print what it shows."""
+"""docs/tuning.md's ("Tuning your fault manager") commands run as shown and print what it shows."""
 
 from __future__ import annotations
 
@@ -17,8 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def shown_commands() -> list[tuple[list[str], str]]:
     """``$ medkit-replay ...`` lines of the section and the output printed under each."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("## Tuning your fault manager", 1)[1].split("\n## ", 1)[0]
+    section = (ROOT / "docs" / "tuning.md").read_text(encoding="utf-8")
     blocks: list[str] = []
     inside: list[str] | None = None
     for line in section.splitlines(keepends=True):
