@@ -55,8 +55,8 @@ def test_engine_sources_never_read_a_clock() -> None:
 
 def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipeline() -> None:
     # follow mode polls with time.monotonic/time.sleep in inputs/follow.py, a remote read
-    # waits before a retry in inputs/remote_store.py and measures a stalled transfer's speed in
-    # inputs/remote_fetch.py; what the replay computes keeps bag time
+    # waits before a retry in inputs/remote/store.py and measures a stalled transfer's speed in
+    # inputs/remote/fetch.py; what the replay computes keeps bag time
     # (the pipeline reads no clock either).
     root = Path(__file__).resolve().parents[1] / "medkit_replay"
     users = sorted(
@@ -65,14 +65,15 @@ def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipelin
         for path in (root / folder).rglob("*.py")
         if any(needle in path.read_text() for needle in ("import time", "monotonic", "sleep("))
     )
-    assert users == ["inputs/follow.py", "inputs/remote_fetch.py", "inputs/remote_store.py"]
+    assert users == ["inputs/follow.py", "inputs/remote/fetch.py", "inputs/remote/store.py"]
 
 
 def test_remote_clients_load_only_for_remote_inputs() -> None:
     """inputs.remote loads with the first URL opened, never with a local replay; even then
     obstore (the 'remote' extra) and boto3 load only when a store is asked for."""
-    assert "medkit_replay.inputs.remote" not in loaded_after("medkit_replay.pipeline")
-    loaded = loaded_after("medkit_replay.inputs.remote")
+    local = loaded_after("medkit_replay.pipeline")
+    assert sorted(m for m in local if m.startswith("medkit_replay.inputs.remote")) == []
+    loaded = loaded_after("medkit_replay.inputs.remote.bag")
     assert "medkit_replay.inputs.ranges" in loaded
     assert sorted(m for m in loaded if m.startswith(("obstore", "boto3", "botocore"))) == []
 
@@ -314,14 +315,14 @@ def test_the_diff_itself_draws_nothing(module: str) -> None:
 
 
 PURE_INPUT_MODULES = {
-    # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; rosbag1.py reads.
-    "rosbag1_records.py": set(),
-    "ros1_messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
-    "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
+    # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; ros1/bag.py reads.
+    "ros1/records.py": set(),
+    "ros1/messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
+    "ros1/decoders.py": {"medkit_replay.inputs.ros1.messages"},
     # MCAP chunks read by index: the plan of a chunk and the read-ahead window (hints only).
-    "mcap_plan.py": set(),
+    "mcap/plan.py": set(),
     # MCAP time windows: which chunks, and their messages merged in log-time order.
-    "mcap_window.py": {"medkit_replay.inputs.mcap_plan", "medkit_replay.inputs.merge"},
+    "mcap/window.py": {"medkit_replay.inputs.mcap.plan", "medkit_replay.inputs.merge"},
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""
 

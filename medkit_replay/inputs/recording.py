@@ -1,6 +1,6 @@
 """A recording: several inputs opened together and merged into one time-ordered message stream.
 
-Chooses a reader per input through READERS (a URL: inputs.remote); the only place inputs are
+Chooses a reader per input through READERS (a URL: inputs.remote.bag); the only place inputs are
 opened and closed.
 """
 
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from typing import Self
 
     from medkit_replay.inputs.follow import Follow
-    from medkit_replay.inputs.remote_store import Tally
+    from medkit_replay.inputs.remote.store import Tally
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary, Loss
@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 def open_bag1(path: Path, ctx: InputContext) -> Input:
     """Open a ROS 1 bag; its reader (and the ROS 1 type store) loads with the first one."""
-    from medkit_replay.inputs.rosbag1 import open_bag1 as open_ros1  # noqa: PLC0415
+    from medkit_replay.inputs.ros1.bag import open_bag1 as open_ros1  # noqa: PLC0415
 
     return open_ros1(path, ctx)
 
@@ -219,7 +219,7 @@ def open_recording(
                     index, selection, sink(str(raw_path)), use_index=use_index, release=release
                 )
                 # The remote reader (threads, the optional store client) loads with a URL only.
-                from medkit_replay.inputs.remote import open_remote  # noqa: PLC0415
+                from medkit_replay.inputs.remote.bag import open_remote  # noqa: PLC0415
 
                 inputs.append(open_remote(str(raw_path), context, tallies))
                 continue

@@ -19,11 +19,11 @@ import yaml
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import open_regular, read_limited_text
-from medkit_replay.inputs.db3 import SQLITE_MAGIC, Db3File
-from medkit_replay.inputs.mcap import MAGIC as MCAP_MAGIC, McapFile
+from medkit_replay.inputs.mcap.reader import MAGIC as MCAP_MAGIC, McapFile
 from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.skipped import report_skipped
 from medkit_replay.inputs.source import Message
+from medkit_replay.inputs.sqlite.db3 import SQLITE_MAGIC, Db3File
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, TEMP_MARGIN, NotABagError, temp_room
 from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder, other_release
 from medkit_replay.model import InputSummary, Loss, TopicSummary

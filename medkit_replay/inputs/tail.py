@@ -9,12 +9,12 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import FileRefusedError
-from medkit_replay.inputs.db3_tail import Db3Tail
 from medkit_replay.inputs.follow import FollowStopped
-from medkit_replay.inputs.mcap_tail import McapTail
+from medkit_replay.inputs.mcap.tail import McapTail
 from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _natural_key
+from medkit_replay.inputs.sqlite.tail import Db3Tail
+from medkit_replay.inputs.sqlite.wal import is_wal_mode
 from medkit_replay.inputs.storage import NotABagError
-from medkit_replay.inputs.wal import is_wal_mode
 from medkit_replay.model import Loss
 
 if TYPE_CHECKING:

@@ -4,7 +4,7 @@ Read-only and bounded: a length field is obeyed only within the file and RECORD_
 Bytes come through a RangeReader (inputs.ranges): a local file or a remote object alike.
 Uncompressed chunks without a checksum are read through their message indexes when that skips
 most of their bytes (only the wanted records are read, and the first header of each run of other
-records skipped: inputs.mcap_plan); anything irregular in what is read falls back to reading the
+records skipped: inputs.mcap.plan); anything irregular in what is read falls back to reading the
 whole chunk, so what is delivered never depends on the route taken. The records inside a skipped
 run are taken to be what the message index (checked against the summary) says they are, as a
 chunk without a wanted topic is never read: damage there goes unseen on both counts.
@@ -20,7 +20,7 @@ from struct import Struct
 from typing import TYPE_CHECKING, BinaryIO
 
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
-from medkit_replay.inputs.mcap_plan import (
+from medkit_replay.inputs.mcap.plan import (
     PAYLOAD_AT,
     PLAIN_CHUNK_HEAD,
     RECORD_HEAD,
@@ -30,7 +30,7 @@ from medkit_replay.inputs.mcap_plan import (
     indexed_count,
     plan_chunk,
 )
-from medkit_replay.inputs.mcap_window import merge_window, window_chunks
+from medkit_replay.inputs.mcap.window import merge_window, window_chunks
 from medkit_replay.inputs.merge import Bound, Timed
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError, Raw
@@ -455,7 +455,7 @@ class McapFile:
         """The wanted messages of an uncompressed chunk, read through its message indexes.
 
         Only the wanted records and the first header of each run of other records skipped
-        are read (:func:`~medkit_replay.inputs.mcap_plan.plan_chunk`; ``plan``: made while
+        are read (:func:`~medkit_replay.inputs.mcap.plan.plan_chunk`; ``plan``: made while
         asking ahead). None when that does not pay (most of the chunk is wanted) or anything
         read is irregular: a compressed or checksummed chunk, an index that does not tile the
         chunk's records with message records or names other channels than the summary, a
@@ -615,7 +615,7 @@ class McapFile:
 
     def _grow(self, need: int) -> bool:
         """Whether the data now reaches byte ``need``; a followed file waits for its writer
-        here (:mod:`medkit_replay.inputs.mcap_tail`), a file read as it stands never grows."""
+        here (:mod:`medkit_replay.inputs.mcap.tail`), a file read as it stands never grows."""
         return need <= self._data_end
 
     def _parse_records(self, body: bytes, op: int) -> None:

@@ -20,14 +20,14 @@ from typing import TYPE_CHECKING, Any
 import numpy
 from rosbags.interfaces import Nodetype
 
-from medkit_replay.inputs.cdr_refusals import (
+from medkit_replay.inputs.cdr.refusals import (
     NOT_PLAIN,
     RejectedError,
     UnsupportedError,
     sequence_refusal,
     string_refusal,
 )
-from medkit_replay.inputs.rosbags_internals import (
+from medkit_replay.inputs.cdr.rosbags_internals import (
     SIZEMAP,
     align,
     align_after,

@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import MAX_TEXT_FILE_BYTES
-from medkit_replay.inputs.mcap import McapFile
+from medkit_replay.inputs.mcap.reader import McapFile
 from medkit_replay.inputs.ranges import STREAM_BLOCK, RangeStream
-from medkit_replay.inputs.remote_store import (
+from medkit_replay.inputs.remote.store import (
     RemoteObject,
     Tally,
     list_objects,
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from types import TracebackType
     from typing import BinaryIO, Self
 
-    from medkit_replay.inputs.remote_store import Location
+    from medkit_replay.inputs.remote.store import Location
     from medkit_replay.inputs.source import InputContext
     from medkit_replay.inputs.storage import StorageFile
     from medkit_replay.model import InputSummary, Loss
@@ -54,7 +54,7 @@ BATCH_RANGES = 128
 """Most ranges asked for in one batch."""
 COALESCE_GAP = 4 * 1024
 """Wanted ranges this close are fetched as one request (the gap is fetched too): in S3's
-prices a request costs what 4 KB do (see mcap_plan.SKIP_AT_LEAST)."""
+prices a request costs what 4 KB do (see mcap.plan.SKIP_AT_LEAST)."""
 MAX_REQUEST = 8 * 1024 * 1024
 """Coalescing stops at this many bytes per request."""
 READ_AHEAD_LIMIT = 64 * 1024 * 1024

@@ -1,6 +1,6 @@
 """An sqlite3 storage file being written (WAL mode), read commit by commit from a private copy.
 
-Never opens the writer's database for anything but plain reads of its bytes; see inputs/wal.py.
+Never opens the writer's database for anything but plain reads of its bytes; see sqlite/wal.py.
 """
 
 from __future__ import annotations
@@ -13,7 +13,9 @@ from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
 from medkit_replay.files import open_regular
-from medkit_replay.inputs.db3 import (
+from medkit_replay.inputs.follow import FollowStopped
+from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.sqlite.db3 import (
     _GOOD,
     SCHEMA_VALUE_LIMIT,
     SQLITE_MAGIC,
@@ -21,10 +23,8 @@ from medkit_replay.inputs.db3 import (
     _Losses,
     connect_read_only,
 )
-from medkit_replay.inputs.follow import FollowStopped
-from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.sqlite.wal import WalMirror, is_wal_mode
 from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError, Raw, temp_room
-from medkit_replay.inputs.wal import WalMirror, is_wal_mode
 from medkit_replay.model import Loss
 
 if TYPE_CHECKING:

@@ -1,13 +1,13 @@
 """An MCAP file still being written, read to its end and waited for until it is finished.
 
-The scan of :class:`~medkit_replay.inputs.mcap.McapFile` with a wait where its data ends.
+The scan of :class:`~medkit_replay.inputs.mcap.reader.McapFile` with a wait where its data ends.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.mcap import (
+from medkit_replay.inputs.mcap.reader import (
     MAGIC,
     NO_FOOTER,
     OP_CHANNEL,
