@@ -159,7 +159,7 @@ def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
 
 PACKAGE = Path(__file__).resolve().parents[1] / "medkit_replay"
 
-NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases"}
+NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases", "jsonio"}
 """Values and vocabulary every layer may use; they import nothing of ours but each other."""
 ALLOWED: dict[str, set[str]] = {
     "model": set(),
@@ -168,6 +168,7 @@ ALLOWED: dict[str, set[str]] = {
     "text": {"model"},
     "wildcards": set(),
     "releases": set(),
+    "jsonio": set(),
     "files": {"errors"},
     "yaml_bounds": {"errors", "text"},
     "spool": {"errors"},
@@ -176,7 +177,7 @@ ALLOWED: dict[str, set[str]] = {
     "history": {"model"},
     "engine": {"model", "wildcards", "releases"},
     "bridges": {"model", "engine", "trace", "releases"},
-    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases"},
+    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases", "jsonio"},
     # config reads parameters into the settings types of the layers it configures.
     "config": {
         "model",
@@ -211,7 +212,7 @@ ALLOWED: dict[str, set[str]] = {
     "msgdefs": NEUTRAL,
     "checks": NEUTRAL | {"result", "files", "yaml_bounds", "outputs"},
     # diffing.render draws through outputs.console; compare and align import neither.
-    "diffing": NEUTRAL | {"result", "files", "inputs", "outputs"},
+    "diffing": NEUTRAL | {"result", "files", "outputs"},
     "fleet": NEUTRAL | {"result", "files", "inputs", "config", "pipeline", "checks", "outputs"},
     # tuning drives several engines through the pipeline's one pass, and runs like a fleet.
     "tuning": NEUTRAL
@@ -290,6 +291,16 @@ def test_imports_follow_the_declared_table() -> None:
         for module in modules
     }
     assert sorted(broken) == []
+
+
+VERDICTS = ("checks", "diffing", "pytest_plugin")
+"""Verdicts on reports and replays: they judge what a replay produced, never a recording."""
+
+
+@pytest.mark.parametrize("unit", VERDICTS)
+def test_verdicts_import_nothing_from_inputs(unit: str) -> None:
+    assert "inputs" not in ALLOWED[unit]
+    assert "inputs" not in imports_by_unit().get(unit, {})
 
 
 def test_no_relative_imports() -> None:
