@@ -11,7 +11,8 @@ from medkit_replay.errors import InputError
 from medkit_replay.files import FileRefusedError
 from medkit_replay.inputs.follow import FollowStopped
 from medkit_replay.inputs.mcap.tail import McapTail
-from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _natural_key
+from medkit_replay.inputs.metadata import Metadata
+from medkit_replay.inputs.rosbag2 import Rosbag2Input, _natural_key
 from medkit_replay.inputs.sqlite.tail import Db3Tail
 from medkit_replay.inputs.sqlite.wal import is_wal_mode
 from medkit_replay.inputs.storage import NotABagError
@@ -65,7 +66,7 @@ class TailInput(Rosbag2Input):
     def __init__(self, path: Path, ctx: InputContext, follow: Follow) -> None:
         self._directory = path.is_dir()
         self._bare = None if self._directory else follow.watch(path)  # refuses a FIFO at once
-        super().__init__(path, ctx, [], _Metadata())
+        super().__init__(path, ctx, [], Metadata())
         self._follow = follow
         self._read: set[Path] = set()  # storage files taken so far
         if self._directory:

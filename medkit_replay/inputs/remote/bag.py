@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from medkit_replay.errors import InputError
 from medkit_replay.files import MAX_TEXT_FILE_BYTES
 from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.metadata import Metadata, read_metadata
 from medkit_replay.inputs.ranges import STREAM_BLOCK, RangeStream
 from medkit_replay.inputs.remote.store import (
     RemoteObject,
@@ -28,14 +29,7 @@ from medkit_replay.inputs.remote.store import (
     open_store,
     parse_location,
 )
-from medkit_replay.inputs.rosbag2 import (
-    STORAGE_FILES,
-    Rosbag2Input,
-    _Metadata,
-    _natural_key,
-    _read_metadata,
-    open_folder,
-)
+from medkit_replay.inputs.rosbag2 import STORAGE_FILES, Rosbag2Input, _natural_key, open_folder
 from medkit_replay.inputs.storage import NotABagError, temp_room
 
 if TYPE_CHECKING:
@@ -245,7 +239,7 @@ def _download(remote: RemoteObject, target: Path) -> None:
             sink.write(remote.fetch(start, min(remote.size, start + DOWNLOAD_BLOCK)))
 
 
-def _is_mcap(name: str, meta: _Metadata) -> bool:
+def _is_mcap(name: str, meta: Metadata) -> bool:
     """Whether a storage file is read by ranges (an MCAP file, not file-compressed)."""
     suffix = PurePosixPath(name).suffix
     if suffix == ".zstd":
@@ -265,7 +259,7 @@ class RemoteBag(Rosbag2Input):
         path: Path,
         ctx: InputContext,
         paths: list[Path],
-        meta: _Metadata,
+        meta: Metadata,
         *,
         remote: RemoteFolder,
     ) -> None:
@@ -352,7 +346,7 @@ def open_remote(text: str, ctx: InputContext, tallies: dict[str, Tally] | None =
     ctx = ctx._replace(warn=translated)
     try:
         if single:
-            return RemoteBag(folder.mirror, ctx, [folder.mirror], _Metadata(), remote=folder)
+            return RemoteBag(folder.mirror, ctx, [folder.mirror], Metadata(), remote=folder)
         return _open_prefix(folder, ctx)
     except InputError as exc:  # said of the URL, not of the temporary folder
         folder.close()
@@ -392,7 +386,7 @@ def _open_prefix(folder: RemoteFolder, ctx: InputContext) -> RemoteBag:
                     path=location.child("metadata.yaml").display,
                 )
             _download(metadata, folder.mirror / "metadata.yaml")
-            meta = _read_metadata(folder.mirror, ctx.warn)
+            meta = read_metadata(folder.mirror, ctx.warn)
     found = sorted(
         (folder.mirror / name for name in folder.sizes if _storage_suffix(name)),
         key=_natural_key,
@@ -410,7 +404,7 @@ def _open_prefix(folder: RemoteFolder, ctx: InputContext) -> RemoteBag:
             return False
         return True
 
-    def bag(path: Path, ctx: InputContext, paths: list[Path], meta: _Metadata) -> RemoteBag:
+    def bag(path: Path, ctx: InputContext, paths: list[Path], meta: Metadata) -> RemoteBag:
         return RemoteBag(path, ctx, paths, meta, remote=folder)
 
     opened = open_folder(folder.mirror, ctx, meta, found, exists, bag)
