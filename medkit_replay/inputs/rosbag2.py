@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import open_regular
-from medkit_replay.inputs.mcap.reader import MAGIC as MCAP_MAGIC, McapFile
+from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.mcap.records import MAGIC as MCAP_MAGIC
 from medkit_replay.inputs.merge import Timed, reorder_batches
 from medkit_replay.inputs.metadata import Metadata, read_metadata
 from medkit_replay.inputs.skipped import report_skipped

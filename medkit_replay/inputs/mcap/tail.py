@@ -7,14 +7,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.mcap.reader import (
+from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.mcap.records import (
     MAGIC,
     NO_FOOTER,
     OP_CHANNEL,
     OP_HEADER,
-    McapFile,
-    _Cursor,
-    _DamageError,
+    Cursor,
+    DamageError,
 )
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
@@ -81,8 +81,8 @@ class McapTail(McapFile):
             self._follow.wait()
         self._data_end = self._size
         try:
-            profile = _Cursor(body).string()
-        except _DamageError:
+            profile = Cursor(body).string()
+        except DamageError:
             raise NotABagError("MCAP header record is damaged") from None
         if profile != "ros2":
             self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
