@@ -159,7 +159,7 @@ def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
 
 PACKAGE = Path(__file__).resolve().parents[1] / "medkit_replay"
 
-NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases", "jsonio"}
+NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases", "jsonio", "closing"}
 """Values and vocabulary every layer may use; they import nothing of ours but each other."""
 ALLOWED: dict[str, set[str]] = {
     "model": set(),
@@ -169,6 +169,7 @@ ALLOWED: dict[str, set[str]] = {
     "wildcards": set(),
     "releases": set(),
     "jsonio": set(),
+    "closing": set(),
     "files": {"errors"},
     "yaml_bounds": {"errors", "text"},
     "spool": {"errors"},
@@ -177,7 +178,17 @@ ALLOWED: dict[str, set[str]] = {
     "history": {"model"},
     "engine": {"model", "wildcards", "releases"},
     "bridges": {"model", "engine", "trace", "releases"},
-    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases", "jsonio"},
+    "inputs": {
+        "model",
+        "errors",
+        "files",
+        "yaml_bounds",
+        "text",
+        "msgdefs",
+        "releases",
+        "jsonio",
+        "closing",
+    },
     # config reads parameters into the settings types of the layers it configures.
     "config": {
         "model",

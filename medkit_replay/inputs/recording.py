@@ -11,6 +11,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from medkit_replay.closing import Closing
 from medkit_replay.errors import InputError
 from medkit_replay.files import is_remote
 from medkit_replay.inputs.merge import merge
@@ -22,8 +23,6 @@ from medkit_replay.inputs.tail import open_tail
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Iterator
-    from types import TracebackType
-    from typing import Self
 
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.remote.store import Tally
@@ -60,7 +59,7 @@ def input_kind(path: Path) -> str:
     return path.suffix.lower()
 
 
-class Recording:
+class Recording(Closing):
     """Opened inputs read as one recording; use as a context manager.
 
     Attributes:
@@ -139,17 +138,6 @@ class Recording:
         """Close every input (temporary copies are deleted); safe to call twice."""
         for opened in self._inputs:
             opened.close()
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 def open_recording(

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import FileRefusedError
-from medkit_replay.inputs.follow import FollowStopped
+from medkit_replay.inputs.follow import FollowStopped, Growing
 from medkit_replay.inputs.mcap.tail import McapTail
 from medkit_replay.inputs.metadata import Metadata
 from medkit_replay.inputs.rosbag2 import Rosbag2Input, _natural_key
@@ -127,14 +127,8 @@ class TailInput(Rosbag2Input):
 
     def _open_tail(self, path: Path, index: int) -> StorageFile:
         kind = McapTail if path.suffix.lower() == ".mcap" else Db3Tail
-        return kind(
-            path,
-            index,
-            self.ctx.warn,
-            follow=self._follow,
-            done=self._moved_on(index, path),
-            watched=self._watch(path),
-        )
+        growing = Growing(self._follow, self._moved_on(index, path), self._watch(path))
+        return kind(path, index, self.ctx.warn, growing=growing)
 
     def _watch(self, path: Path) -> Watched:
         """Watch a storage file from now on.

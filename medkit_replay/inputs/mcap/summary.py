@@ -24,7 +24,12 @@ from medkit_replay.inputs.mcap.records import (
     chunk_index_record,
 )
 from medkit_replay.inputs.ranges import LocalSource
-from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, Connection, NotABagError
+from medkit_replay.inputs.storage import (
+    RECORD_SIZE_LIMIT,
+    Connection,
+    NotABagError,
+    StorageFields,
+)
 from medkit_replay.model import Loss
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
@@ -36,7 +41,7 @@ if TYPE_CHECKING:
     from medkit_replay.inputs.source import Warn
 
 
-class McapSummary:
+class McapSummary(StorageFields):
     """What one MCAP file declares, read before its messages; :class:`McapFile` reads them."""
 
     storage = "mcap"
@@ -51,14 +56,8 @@ class McapSummary:
         *,
         source: ByteSource | None = None,
     ) -> None:
-        self.path = path
+        super().__init__(path, file_no, warn)
         self._source = source if source is not None else LocalSource(path)
-        self.file_no = file_no
-        self.warn = warn
-        self.connections: dict[int, Connection] = {}
-        self.counts: dict[int, int] = {}
-        self.start_ns: int | None = None
-        self.end_ns: int | None = None
         self._schemas: dict[int, tuple[str, Definition]] = {}
         self._chunks: list[ChunkIndex] | None = None
         self._wanted: dict[int, bool] = {}

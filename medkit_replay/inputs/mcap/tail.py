@@ -23,12 +23,11 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
     from pathlib import Path
 
-    from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.follow import Growing
     from medkit_replay.inputs.merge import Bound, Timed
     from medkit_replay.inputs.ranges import RangeReader
     from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection, Raw
-    from medkit_replay.inputs.watch import Watched
 
 
 class McapTail(McapFile):
@@ -47,15 +46,11 @@ class McapTail(McapFile):
         file_no: int,
         warn: Warn,
         *,
-        follow: Follow,
-        done: Callable[[], bool],
-        watched: Watched,
+        growing: Growing,
     ) -> None:
-        self._follow = follow
-        self._done = done
-        self._watched = watched
+        self._follow, self._done, self._watched = growing
         self._unfinished = False  # the writer moved on before the file's Data End record
-        super().__init__(path, file_no, warn, source=LocalSource(path, watched.check_open))
+        super().__init__(path, file_no, warn, source=LocalSource(path, self._watched.check_open))
 
     def _probe(self, reader: RangeReader) -> None:
         """Wait for the magic and the header record; nothing else is known before reading."""

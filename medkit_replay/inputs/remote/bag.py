@@ -17,6 +17,7 @@ from pathlib import Path, PurePosixPath
 from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING, NamedTuple
 
+from medkit_replay.closing import Closing
 from medkit_replay.errors import InputError
 from medkit_replay.files import MAX_TEXT_FILE_BYTES
 from medkit_replay.inputs.mcap.reader import McapFile
@@ -33,8 +34,7 @@ from medkit_replay.inputs.rosbag2 import STORAGE_FILES, Rosbag2Input, _natural_k
 from medkit_replay.inputs.storage import NotABagError, temp_room
 
 if TYPE_CHECKING:
-    from types import TracebackType
-    from typing import BinaryIO, Self
+    from typing import BinaryIO
 
     from medkit_replay.inputs.remote.store import Location
     from medkit_replay.inputs.source import InputContext
@@ -65,7 +65,7 @@ class _Block(NamedTuple):
     slot: int
 
 
-class RemoteRanges:
+class RemoteRanges(Closing):
     """:class:`~medkit_replay.inputs.ranges.RangeReader` over one remote object.
 
     Hints are gathered until the next read, then sorted, coalesced and sent in batches (one
@@ -180,15 +180,7 @@ class RemoteRanges:
             return None
         return self._served(found, offset, end)
 
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
+    def close(self) -> None:
         self._stop.set()
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._blocks.clear()

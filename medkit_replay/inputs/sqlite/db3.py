@@ -17,6 +17,7 @@ from medkit_replay.inputs.storage import (
     Connection,
     NotABagError,
     Raw,
+    StorageFields,
 )
 from medkit_replay.model import Loss
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
@@ -81,19 +82,13 @@ class _Losses:
             self.ids.append(rowid)
 
 
-class Db3File:
+class Db3File(StorageFields):
     """One ``.db3`` file; see :class:`medkit_replay.inputs.storage.StorageFile`."""
 
     storage = "sqlite3"
 
     def __init__(self, path: Path, file_no: int, warn: Warn) -> None:
-        self.path = path
-        self.file_no = file_no
-        self.warn = warn
-        self.connections: dict[int, Connection] = {}
-        self.counts: dict[int, int] = {}
-        self.start_ns: int | None = None
-        self.end_ns: int | None = None
+        super().__init__(path, file_no, warn)
         self._counted = False
         self._emitted = 0  # wanted messages read: what damage leaves of the rows counted
         self._wanted_ids: set[int] = set()

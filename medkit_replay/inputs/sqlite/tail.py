@@ -30,10 +30,9 @@ from medkit_replay.model import Loss
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
-    from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.follow import Growing
     from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection
-    from medkit_replay.inputs.watch import Watched
 
 _ORDER = itemgetter(0, 1)
 _HEADER_BYTES = 100  # an SQLite database header
@@ -57,13 +56,9 @@ class Db3Tail(Db3File):
         file_no: int,
         warn: Warn,
         *,
-        follow: Follow,
-        done: Callable[[], bool],
-        watched: Watched,
+        growing: Growing,
     ) -> None:
-        self._follow = follow
-        self._done = done
-        self._watched = watched
+        self._follow, self._done, self._watched = growing
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
         self._too_large = False  # for a copy in the temporary folder
