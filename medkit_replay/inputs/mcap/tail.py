@@ -40,14 +40,7 @@ class McapTail(McapFile):
     every opening checks it is still the file first seen (``watched``).
     """
 
-    def __init__(
-        self,
-        path: Path,
-        file_no: int,
-        warn: Warn,
-        *,
-        growing: Growing,
-    ) -> None:
+    def __init__(self, path: Path, file_no: int, warn: Warn, *, growing: Growing) -> None:
         self._follow, self._done, self._watched = growing
         self._unfinished = False  # the writer moved on before the file's Data End record
         super().__init__(path, file_no, warn, source=LocalSource(path, self._watched.check_open))

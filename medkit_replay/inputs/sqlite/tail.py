@@ -50,14 +50,7 @@ class Db3Tail(Db3File):
     first seen (``watched``).
     """
 
-    def __init__(
-        self,
-        path: Path,
-        file_no: int,
-        warn: Warn,
-        *,
-        growing: Growing,
-    ) -> None:
+    def __init__(self, path: Path, file_no: int, warn: Warn, *, growing: Growing) -> None:
         self._follow, self._done, self._watched = growing
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
