@@ -15,8 +15,8 @@ import pytest
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.mcap import plan as mcap_plan
-from medkit_replay.inputs.remote import bag as remote
-from medkit_replay.inputs.remote.bag import RemoteRanges
+from medkit_replay.inputs.remote import ranges as remote
+from medkit_replay.inputs.remote.ranges import RemoteRanges
 from medkit_replay.inputs.remote.store import RemoteObject, Tally, open_store, parse_location
 from tests.inputs.builders import diag, log, string_msg, write_bag
 from tests.remote_support import range_server, same_as_local
