@@ -345,6 +345,8 @@ PURE_INPUT_MODULES = {
     "mcap/plan.py": set(),
     # MCAP time windows: which chunks, and their messages merged in log-time order.
     "mcap/window.py": {"medkit_replay.inputs.mcap.plan", "medkit_replay.inputs.merge"},
+    # MCAP records: opcodes, layouts, the bounded cursor; the readers around them read.
+    "mcap/records.py": {"medkit_replay.inputs.mcap.plan", "medkit_replay.inputs.storage"},
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""
 
@@ -357,3 +359,32 @@ def test_pure_input_modules_read_no_files(module: str) -> None:
     text = path.read_text(encoding="utf-8")
     for needle in ("open(", "Path", "os."):
         assert needle not in text, f"{module} uses {needle}"
+
+
+INPUT_FORMATS = ["cdr", "mcap", "remote", "ros1", "sqlite"]
+"""The subpackages of inputs, one per format (or the CDR decoders all formats but ROS 1 share);
+what every format shares is at inputs/ itself."""
+
+
+def test_inputs_are_split_by_format_each_saying_its_job_in_one_line() -> None:
+    root = PACKAGE / "inputs"
+    found = sorted(p.parent.name for p in root.glob("*/__init__.py"))
+    assert found == INPUT_FORMATS
+    for name in INPUT_FORMATS:
+        tree = ast.parse((root / name / "__init__.py").read_text(encoding="utf-8"))
+        docstring = ast.get_docstring(tree)
+        assert docstring is not None, name
+        assert "\n" not in docstring.strip(), name
+        assert len(tree.body) == 1, f"inputs/{name}/__init__.py holds more than its docstring"
+
+
+MAX_MODULE_LINES = 500
+
+
+def test_no_input_module_is_over_500_lines() -> None:
+    long = {
+        str(path.relative_to(PACKAGE)): lines
+        for path in (PACKAGE / "inputs").rglob("*.py")
+        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    assert long == {}
