@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 from bench_recording import PARAMS, mission_recording
 
 from medkit_replay import replay
-from medkit_replay.inputs.remote_store import RemoteObject
+from medkit_replay.inputs.remote.store import RemoteObject
 
 if TYPE_CHECKING:
     from multiprocessing.connection import Connection

@@ -55,8 +55,8 @@ def test_engine_sources_never_read_a_clock() -> None:
 
 def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipeline() -> None:
     # follow mode polls with time.monotonic/time.sleep in inputs/follow.py, a remote read
-    # waits before a retry in inputs/remote_store.py and measures a stalled transfer's speed in
-    # inputs/remote_fetch.py; what the replay computes keeps bag time
+    # waits before a retry in inputs/remote/store.py and measures a stalled transfer's speed in
+    # inputs/remote/fetch.py; what the replay computes keeps bag time
     # (the pipeline reads no clock either).
     root = Path(__file__).resolve().parents[1] / "medkit_replay"
     users = sorted(
@@ -65,14 +65,15 @@ def test_waiting_for_a_growing_recording_is_the_only_clock_of_inputs_and_pipelin
         for path in (root / folder).rglob("*.py")
         if any(needle in path.read_text() for needle in ("import time", "monotonic", "sleep("))
     )
-    assert users == ["inputs/follow.py", "inputs/remote_fetch.py", "inputs/remote_store.py"]
+    assert users == ["inputs/follow.py", "inputs/remote/fetch.py", "inputs/remote/store.py"]
 
 
 def test_remote_clients_load_only_for_remote_inputs() -> None:
     """inputs.remote loads with the first URL opened, never with a local replay; even then
     obstore (the 'remote' extra) and boto3 load only when a store is asked for."""
-    assert "medkit_replay.inputs.remote" not in loaded_after("medkit_replay.pipeline")
-    loaded = loaded_after("medkit_replay.inputs.remote")
+    local = loaded_after("medkit_replay.pipeline")
+    assert sorted(m for m in local if m.startswith("medkit_replay.inputs.remote")) == []
+    loaded = loaded_after("medkit_replay.inputs.remote.bag")
     assert "medkit_replay.inputs.ranges" in loaded
     assert sorted(m for m in loaded if m.startswith(("obstore", "boto3", "botocore"))) == []
 
@@ -158,7 +159,7 @@ def test_printing_commands_load_nothing_heavy(arguments: list[str]) -> None:
 
 PACKAGE = Path(__file__).resolve().parents[1] / "medkit_replay"
 
-NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases"}
+NEUTRAL = {"model", "errors", "version", "text", "wildcards", "releases", "jsonio", "closing"}
 """Values and vocabulary every layer may use; they import nothing of ours but each other."""
 ALLOWED: dict[str, set[str]] = {
     "model": set(),
@@ -167,6 +168,8 @@ ALLOWED: dict[str, set[str]] = {
     "text": {"model"},
     "wildcards": set(),
     "releases": set(),
+    "jsonio": set(),
+    "closing": set(),
     "files": {"errors"},
     "yaml_bounds": {"errors", "text"},
     "spool": {"errors"},
@@ -175,7 +178,17 @@ ALLOWED: dict[str, set[str]] = {
     "history": {"model"},
     "engine": {"model", "wildcards", "releases"},
     "bridges": {"model", "engine", "trace", "releases"},
-    "inputs": {"model", "errors", "files", "yaml_bounds", "text", "msgdefs", "releases"},
+    "inputs": {
+        "model",
+        "errors",
+        "files",
+        "yaml_bounds",
+        "text",
+        "msgdefs",
+        "releases",
+        "jsonio",
+        "closing",
+    },
     # config reads parameters into the settings types of the layers it configures.
     "config": {
         "model",
@@ -210,7 +223,7 @@ ALLOWED: dict[str, set[str]] = {
     "msgdefs": NEUTRAL,
     "checks": NEUTRAL | {"result", "files", "yaml_bounds", "outputs"},
     # diffing.render draws through outputs.console; compare and align import neither.
-    "diffing": NEUTRAL | {"result", "files", "inputs", "outputs"},
+    "diffing": NEUTRAL | {"result", "files", "outputs"},
     "fleet": NEUTRAL | {"result", "files", "inputs", "config", "pipeline", "checks", "outputs"},
     # tuning drives several engines through the pipeline's one pass, and runs like a fleet.
     "tuning": NEUTRAL
@@ -291,6 +304,16 @@ def test_imports_follow_the_declared_table() -> None:
     assert sorted(broken) == []
 
 
+VERDICTS = ("checks", "diffing", "pytest_plugin")
+"""Verdicts on reports and replays: they judge what a replay produced, never a recording."""
+
+
+@pytest.mark.parametrize("unit", VERDICTS)
+def test_verdicts_import_nothing_from_inputs(unit: str) -> None:
+    assert "inputs" not in ALLOWED[unit]
+    assert "inputs" not in imports_by_unit().get(unit, {})
+
+
 def test_no_relative_imports() -> None:
     for path in PACKAGE.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
@@ -314,14 +337,16 @@ def test_the_diff_itself_draws_nothing(module: str) -> None:
 
 
 PURE_INPUT_MODULES = {
-    # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; rosbag1.py reads.
-    "rosbag1_records.py": set(),
-    "ros1_messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
-    "ros1_decoders.py": {"medkit_replay.inputs.ros1_messages"},
+    # ROS 1 bags: the record parser and the ROS 1 -> ROS 2 message mapping; ros1/bag.py reads.
+    "ros1/records.py": set(),
+    "ros1/messages.py": {"medkit_replay.msgdefs", "medkit_replay.inputs.selection"},
+    "ros1/decoders.py": {"medkit_replay.inputs.ros1.messages"},
     # MCAP chunks read by index: the plan of a chunk and the read-ahead window (hints only).
-    "mcap_plan.py": set(),
+    "mcap/plan.py": set(),
     # MCAP time windows: which chunks, and their messages merged in log-time order.
-    "mcap_window.py": {"medkit_replay.inputs.mcap_plan", "medkit_replay.inputs.merge"},
+    "mcap/window.py": {"medkit_replay.inputs.mcap.plan", "medkit_replay.inputs.merge"},
+    # MCAP records: opcodes, layouts, the bounded cursor; the readers around them read.
+    "mcap/records.py": {"medkit_replay.inputs.mcap.plan", "medkit_replay.inputs.storage"},
 }
 """Modules of inputs that parse or map values they are given: no file access, few imports."""
 
@@ -334,3 +359,32 @@ def test_pure_input_modules_read_no_files(module: str) -> None:
     text = path.read_text(encoding="utf-8")
     for needle in ("open(", "Path", "os."):
         assert needle not in text, f"{module} uses {needle}"
+
+
+INPUT_FORMATS = ["cdr", "mcap", "remote", "ros1", "sqlite"]
+"""The subpackages of inputs, one per format (or the CDR decoders all formats but ROS 1 share);
+what every format shares is at inputs/ itself."""
+
+
+def test_inputs_are_split_by_format_each_saying_its_job_in_one_line() -> None:
+    root = PACKAGE / "inputs"
+    found = sorted(p.parent.name for p in root.glob("*/__init__.py"))
+    assert found == INPUT_FORMATS
+    for name in INPUT_FORMATS:
+        tree = ast.parse((root / name / "__init__.py").read_text(encoding="utf-8"))
+        docstring = ast.get_docstring(tree)
+        assert docstring is not None, name
+        assert "\n" not in docstring.strip(), name
+        assert len(tree.body) == 1, f"inputs/{name}/__init__.py holds more than its docstring"
+
+
+MAX_MODULE_LINES = 500
+
+
+def test_no_input_module_is_over_500_lines() -> None:
+    long = {
+        str(path.relative_to(PACKAGE)): lines
+        for path in (PACKAGE / "inputs").rglob("*.py")
+        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    assert long == {}

@@ -19,7 +19,7 @@ from rosbags.rosbag1 import Reader
 
 from medkit_replay import replay
 from medkit_replay.cli import main
-from medkit_replay.inputs.ros1_messages import ros1_typestore
+from medkit_replay.inputs.ros1.messages import ros1_typestore
 from medkit_replay.outputs.json_report import dumps
 from medkit_replay.pytest_plugin import RecordingReplayer, assert_confirmed, assert_status
 

@@ -20,7 +20,7 @@ from medkit_replay.files import (
     open_regular,
     report_limit_text,
 )
-from medkit_replay.inputs.jsonl import JsonRefusedError, loads_strict, locate_refusal
+from medkit_replay.jsonio import JsonRefusedError, loads_strict, locate_refusal
 
 if TYPE_CHECKING:
     from collections.abc import Iterator

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.files import open_regular
-from medkit_replay.inputs.db3 import connect_read_only
-from medkit_replay.inputs.mcap import NO_FOOTER, McapFile
+from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.mcap.records import NO_FOOTER
+from medkit_replay.inputs.sqlite.db3 import connect_read_only
 from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError
 from medkit_replay.msgdefs import Definition, normalize_typename
 

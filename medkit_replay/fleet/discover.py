@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import is_remote
 from medkit_replay.inputs.recording import READERS, input_kind
-from medkit_replay.inputs.remote_store import list_objects, open_store, parse_location
+from medkit_replay.inputs.remote.store import list_objects, open_store, parse_location
 
 if TYPE_CHECKING:
     from collections.abc import Iterable

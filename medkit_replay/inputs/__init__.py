@@ -7,7 +7,7 @@ merge in (log time, input index, position) order. Only the topics the replay nee
 (:class:`Selection`), by decoders generated from the recording's own definitions or bundled
 ones (rosbags decodes the types they do not cover and big-endian payloads). Uncompressed MCAP
 chunks are read through their message indexes. Any of these may be named by an ``s3://``,
-``gs://`` or ``http(s)://`` URL instead (:mod:`medkit_replay.inputs.remote`, the ``remote``
+``gs://`` or ``http(s)://`` URL instead (:mod:`medkit_replay.inputs.remote.bag`, the ``remote``
 extra): an indexed MCAP is then fetched by ranges, other storage files through a temporary copy.
 Damage costs what it destroyed and is said in ``Recording.warnings``, what it cost (messages,
 bytes, bag time, where known) in ``Recording.losses``; an input of which nothing can be read

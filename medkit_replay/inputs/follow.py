@@ -8,13 +8,13 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.inputs.watch import Watched
 from medkit_replay.model import POLL_DEFAULT_S, POLL_MAX_S, POLL_MIN_S
 
 if TYPE_CHECKING:
-    from collections.abc import Iterator
+    from collections.abc import Callable, Iterator
     from pathlib import Path
 
 COSTLY_SHARE = 0.1
@@ -141,3 +141,12 @@ class Follow:
         self.check()
         for watched in self.watched:
             watched.look()
+
+
+class Growing(NamedTuple):
+    """How one storage file still being written is read: the :class:`Follow` that paces each
+    wait, whether the writer has moved on from it (``done``), and its identity (``watched``)."""
+
+    follow: Follow
+    done: Callable[[], bool]
+    watched: Watched

@@ -11,6 +11,7 @@ import os
 from contextlib import suppress
 from typing import TYPE_CHECKING, BinaryIO, Protocol
 
+from medkit_replay.closing import Closing
 from medkit_replay.files import open_regular
 
 if TYPE_CHECKING:
@@ -103,7 +104,7 @@ class LocalSource:
         return stream  # type: ignore[return-value]  # a BufferedReader
 
 
-class LocalRanges:
+class LocalRanges(Closing):
     """:class:`RangeReader` over an open local file."""
 
     always_ahead = False
@@ -158,15 +159,7 @@ class LocalRanges:
     def forget(self, before: int) -> None:
         """Nothing held: the page cache keeps what it will."""
 
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
+    def close(self) -> None:
         self._file.close()
 
 

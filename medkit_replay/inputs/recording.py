@@ -1,6 +1,6 @@
 """A recording: several inputs opened together and merged into one time-ordered message stream.
 
-Chooses a reader per input through READERS (a URL: inputs.remote); the only place inputs are
+Chooses a reader per input through READERS (a URL: inputs.remote.bag); the only place inputs are
 opened and closed.
 """
 
@@ -11,6 +11,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from medkit_replay.closing import Closing
 from medkit_replay.errors import InputError
 from medkit_replay.files import is_remote
 from medkit_replay.inputs.merge import merge
@@ -22,11 +23,9 @@ from medkit_replay.inputs.tail import open_tail
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Iterator
-    from types import TracebackType
-    from typing import Self
 
     from medkit_replay.inputs.follow import Follow
-    from medkit_replay.inputs.remote_store import Tally
+    from medkit_replay.inputs.remote.store import Tally
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import Input, Message, Opener
     from medkit_replay.model import InputSummary, Loss
@@ -35,7 +34,7 @@ if TYPE_CHECKING:
 
 def open_bag1(path: Path, ctx: InputContext) -> Input:
     """Open a ROS 1 bag; its reader (and the ROS 1 type store) loads with the first one."""
-    from medkit_replay.inputs.rosbag1 import open_bag1 as open_ros1  # noqa: PLC0415
+    from medkit_replay.inputs.ros1.bag import open_bag1 as open_ros1  # noqa: PLC0415
 
     return open_ros1(path, ctx)
 
@@ -60,7 +59,7 @@ def input_kind(path: Path) -> str:
     return path.suffix.lower()
 
 
-class Recording:
+class Recording(Closing):
     """Opened inputs read as one recording; use as a context manager.
 
     Attributes:
@@ -140,17 +139,6 @@ class Recording:
         for opened in self._inputs:
             opened.close()
 
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
-
 
 def open_recording(
     paths: Iterable[str | Path],
@@ -219,7 +207,7 @@ def open_recording(
                     index, selection, sink(str(raw_path)), use_index=use_index, release=release
                 )
                 # The remote reader (threads, the optional store client) loads with a URL only.
-                from medkit_replay.inputs.remote import open_remote  # noqa: PLC0415
+                from medkit_replay.inputs.remote.bag import open_remote  # noqa: PLC0415
 
                 inputs.append(open_remote(str(raw_path), context, tallies))
                 continue

@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from pathlib import Path
 
     from medkit_replay.inputs.merge import Bound, Timed
+    from medkit_replay.inputs.source import Warn
 
 RECORD_SIZE_LIMIT = 1 << 30
 """Largest record, chunk or payload (bytes) a length field may make a reader allocate.
@@ -62,6 +63,20 @@ class Raw(NamedTuple):
 
 class NotABagError(Exception):
     """A file cannot be read as the storage its name or metadata claims (nothing readable)."""
+
+
+class StorageFields:
+    """What a storage file reader holds from the start (see :class:`StorageFile`): where it is,
+    its number in its input, where it warns, and what it declares (empty until probed)."""
+
+    def __init__(self, path: Path, file_no: int, warn: Warn) -> None:
+        self.path = path
+        self.file_no = file_no
+        self.warn = warn
+        self.connections: dict[int, Connection] = {}
+        self.counts: dict[int, int] = {}
+        self.start_ns: int | None = None
+        self.end_ns: int | None = None
 
 
 class StorageFile(Protocol):

@@ -9,12 +9,13 @@ from typing import TYPE_CHECKING
 
 from medkit_replay.errors import InputError
 from medkit_replay.files import FileRefusedError
-from medkit_replay.inputs.db3_tail import Db3Tail
-from medkit_replay.inputs.follow import FollowStopped
-from medkit_replay.inputs.mcap_tail import McapTail
-from medkit_replay.inputs.rosbag2 import Rosbag2Input, _Metadata, _natural_key
+from medkit_replay.inputs.follow import FollowStopped, Growing
+from medkit_replay.inputs.mcap.tail import McapTail
+from medkit_replay.inputs.metadata import Metadata
+from medkit_replay.inputs.rosbag2 import Rosbag2Input, _natural_key
+from medkit_replay.inputs.sqlite.tail import Db3Tail
+from medkit_replay.inputs.sqlite.wal import is_wal_mode
 from medkit_replay.inputs.storage import NotABagError
-from medkit_replay.inputs.wal import is_wal_mode
 from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
@@ -65,7 +66,7 @@ class TailInput(Rosbag2Input):
     def __init__(self, path: Path, ctx: InputContext, follow: Follow) -> None:
         self._directory = path.is_dir()
         self._bare = None if self._directory else follow.watch(path)  # refuses a FIFO at once
-        super().__init__(path, ctx, [], _Metadata())
+        super().__init__(path, ctx, [], Metadata())
         self._follow = follow
         self._read: set[Path] = set()  # storage files taken so far
         if self._directory:
@@ -126,14 +127,8 @@ class TailInput(Rosbag2Input):
 
     def _open_tail(self, path: Path, index: int) -> StorageFile:
         kind = McapTail if path.suffix.lower() == ".mcap" else Db3Tail
-        return kind(
-            path,
-            index,
-            self.ctx.warn,
-            follow=self._follow,
-            done=self._moved_on(index, path),
-            watched=self._watch(path),
-        )
+        growing = Growing(self._follow, self._moved_on(index, path), self._watch(path))
+        return kind(path, index, self.ctx.warn, growing=growing)
 
     def _watch(self, path: Path) -> Watched:
         """Watch a storage file from now on.

@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_typestore
 
-from medkit_replay.inputs.cdr import REFUSALS, RejectedError, generated_decoder
-from medkit_replay.inputs.definition_bounds import check_definition
+from medkit_replay.inputs.cdr.bounds import check_definition
+from medkit_replay.inputs.cdr.decoders import REFUSALS, RejectedError, generated_decoder
 from medkit_replay.msgdefs import (
     FAULT_TYPES,
     Definition,
@@ -74,7 +74,7 @@ def _complete(types: Typesdict, fallback: Callable[[], Typesdict]) -> Typesdict:
 class Decoder:
     """Decodes one type's CDR payloads, trying the recording's definition, then the bundled one.
 
-    Each candidate definition decodes with its generated decoder (:mod:`medkit_replay.inputs.cdr`);
+    Each candidate definition decodes with its generated decoder (``inputs.cdr.decoders``);
     rosbags decodes for a candidate that has none, and every payload whose encapsulation is not
     plain little-endian CDR (big-endian, parameter lists). A payload the first candidate refuses
     is tried with the next; the first that fits is used from then on.

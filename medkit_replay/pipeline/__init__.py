@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.history import FaultHistory
     from medkit_replay.inputs.follow import Follow
-    from medkit_replay.inputs.remote_store import Tally
+    from medkit_replay.inputs.remote.store import Tally
     from medkit_replay.model import InputSummary, Loss
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.routing import Handler

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.bridges.base import ReportSink
     from medkit_replay.config.replay_options import ReplayOptions
-    from medkit_replay.inputs.remote_store import Tally
+    from medkit_replay.inputs.remote.store import Tally
     from medkit_replay.model import Origin, Progress
 
 Request = ReportRequest | ClearRequest

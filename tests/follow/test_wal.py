@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from medkit_replay.inputs.wal import WalMirror, is_wal_mode
+from medkit_replay.inputs.sqlite.wal import WalMirror, is_wal_mode
 
 if TYPE_CHECKING:
     from collections.abc import Iterator

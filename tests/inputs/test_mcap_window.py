@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING, Any
 import pytest
 from mcap.reader import SeekingReader
 
-from medkit_replay.inputs.mcap import McapFile
-from medkit_replay.inputs.mcap_plan import ChunkIndex
-from medkit_replay.inputs.mcap_window import merge_window, window_chunks
+from medkit_replay.inputs.mcap.plan import ChunkIndex
+from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.mcap.window import merge_window, window_chunks
 from medkit_replay.inputs.merge import Timed
 from medkit_replay.inputs.ranges import LocalRanges, LocalSource
 from tests.inputs.builders import COMPRESSIONS, TOPICS, Message, write_mcap

@@ -23,7 +23,7 @@ import pytest
 from medkit_replay import replay
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import open_recording
-from medkit_replay.inputs.remote_store import open_store, parse_location
+from medkit_replay.inputs.remote.store import open_store, parse_location
 from medkit_replay.outputs.json_report import dumps
 from tests.inputs.builders import diag, flipped, string_msg, truncated, write_bag
 from tests.remote_support import (

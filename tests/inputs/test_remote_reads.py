@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING
 import pytest
 
 from medkit_replay.errors import InputError
-from medkit_replay.inputs import mcap_plan, remote
-from medkit_replay.inputs.remote import RemoteRanges
-from medkit_replay.inputs.remote_store import RemoteObject, Tally, open_store, parse_location
+from medkit_replay.inputs.mcap import plan as mcap_plan
+from medkit_replay.inputs.remote import ranges as remote
+from medkit_replay.inputs.remote.ranges import RemoteRanges
+from medkit_replay.inputs.remote.store import RemoteObject, Tally, open_store, parse_location
 from tests.inputs.builders import diag, log, string_msg, write_bag
 from tests.remote_support import range_server, same_as_local
 

@@ -11,14 +11,14 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from medkit_replay.inputs.ros1_decoders import (
+from medkit_replay.inputs.ros1.decoders import (
     Ros1DiagnosticArrayView,
     decode_diagnostic_array,
     decode_log,
     full_decode,
     full_decode_log,
 )
-from medkit_replay.inputs.ros1_messages import diagnostic_array, log, log_level
+from medkit_replay.inputs.ros1.messages import diagnostic_array, log, log_level
 from tests.inputs.ros1_builders import TS1, diag1, header1, new1
 
 if TYPE_CHECKING:

@@ -14,7 +14,7 @@ import pytest
 from medkit_replay import replay
 from medkit_replay.bridges.action_status import NetState, derive_state
 from medkit_replay.inputs import Message, open_recording
-from medkit_replay.inputs.ros1_messages import (
+from medkit_replay.inputs.ros1.messages import (
     GOAL_ID_NAMESPACE,
     GOAL_STATUS_TO_ROS2,
     goal_status,
@@ -404,7 +404,7 @@ def big_frames(count: int = 60) -> list[Rec1]:
 
 
 def read_counting(path: Path, monkeypatch: pytest.MonkeyPatch, *, use_index: bool) -> Any:
-    from medkit_replay.inputs.rosbag1_file import Bag1File  # noqa: PLC0415
+    from medkit_replay.inputs.ros1.file import Bag1File  # noqa: PLC0415
 
     total = [0]
     original = Bag1File._read_at

@@ -12,7 +12,7 @@ import pytest
 from rosbags.interfaces import Nodetype
 from rosbags.typesys.store import Typestore
 
-from medkit_replay.inputs import rosbags_internals as internals
+from medkit_replay.inputs.cdr import rosbags_internals as internals
 from medkit_replay.msgdefs import base_typestore
 
 PRIMITIVES = {

@@ -117,7 +117,7 @@ def test_corrupt_payload_raises_decode_error_without_huge_allocation() -> None:
 def test_reference_types_match_the_store_they_stand_in_for() -> None:
     """The bundled DiagnosticArray family lays out as rosbags' Jazzy store does: checking a
     recording against it decides as checking against the store would."""
-    from medkit_replay.inputs.cdr_diagnostics import DIAGNOSTIC_ARRAY, layout  # noqa: PLC0415
+    from medkit_replay.inputs.cdr.diagnostics import DIAGNOSTIC_ARRAY, layout  # noqa: PLC0415
     from medkit_replay.msgdefs import reference_types  # noqa: PLC0415
 
     assert layout(reference_types(), DIAGNOSTIC_ARRAY) == layout(

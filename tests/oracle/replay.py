@@ -33,7 +33,7 @@ from medkit_replay.config.replay_options import replay_options
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.engine.timeline import Timeline
 from medkit_replay.inputs import Message, Selection, open_recording
-from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore
+from medkit_replay.inputs.ros1.messages import TRANSLATIONS, ros1_typestore
 from medkit_replay.inputs.typestore import _recorded_store
 from medkit_replay.model import ClearRequest, ReportRequest
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore, normalize_typename

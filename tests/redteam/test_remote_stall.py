@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 import pytest
 
 from medkit_replay.errors import InputError
-from medkit_replay.inputs.remote_fetch import SPEED_LIMIT_ENV, SPEED_TIME_ENV
-from medkit_replay.inputs.remote_store import RemoteObject, Tally, open_store, parse_location
+from medkit_replay.inputs.remote.fetch import SPEED_LIMIT_ENV, SPEED_TIME_ENV
+from medkit_replay.inputs.remote.store import RemoteObject, Tally, open_store, parse_location
 from tests.inputs.builders import diag, write_bare
 from tests.redteam.support import assert_one_line_error, run_limited
 from tests.remote_support import range_server

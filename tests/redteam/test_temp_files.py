@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.mcap import MAGIC as MCAP_MAGIC
+from medkit_replay.inputs.mcap.records import MAGIC as MCAP_MAGIC
 from tests.inputs.builders import as_wal, diag, storage_file, write_bag
 from tests.redteam.support import assert_one_line_error, run_limited, tree_listing
 

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from medkit_replay.inputs.cdr import DiagnosticArrayView
-from medkit_replay.inputs.ros1_decoders import Ros1DiagnosticArrayView
+from medkit_replay.inputs.cdr.decoders import DiagnosticArrayView
+from medkit_replay.inputs.ros1.decoders import Ros1DiagnosticArrayView
 from medkit_replay.outputs.json_report import dumps
 from medkit_replay.pipeline import replay
 from tests.oracle.replay import ENGINE_SECTIONS, oracle_sections

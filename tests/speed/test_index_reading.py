@@ -14,7 +14,7 @@ import pytest
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import open_recording
-from medkit_replay.inputs.mcap import McapFile
+from medkit_replay.inputs.mcap.reader import McapFile
 from tests.inputs.builders import (
     TS,
     Rec,

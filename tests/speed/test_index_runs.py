@@ -15,7 +15,7 @@ import pytest
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs import open_recording
-from medkit_replay.inputs.mcap_plan import (
+from medkit_replay.inputs.mcap.plan import (
     AHEAD_BYTES,
     HEADS_AHEAD,
     PIECES_AHEAD,

@@ -17,8 +17,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from medkit_replay.inputs import cdr, cdr_generator
-from medkit_replay.inputs.cdr import REFUSALS, DiagnosticArrayView, generate, generated_decoder
+from medkit_replay.inputs.cdr import decoders as cdr, generator as cdr_generator
+from medkit_replay.inputs.cdr.decoders import (
+    REFUSALS,
+    DiagnosticArrayView,
+    generate,
+    generated_decoder,
+)
 from medkit_replay.inputs.typestore import PLAIN_CDR, DecodeError, make_decoder
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, base_typestore
 from tests.speed.support import plain

@@ -11,15 +11,15 @@ from typing import TYPE_CHECKING
 
 from rosbags.interfaces import Nodetype
 
-from medkit_replay.inputs.cdr_generator import Generator
-from medkit_replay.inputs.cdr_refusals import (
+from medkit_replay.inputs.cdr.generator import Generator
+from medkit_replay.inputs.cdr.refusals import (
     NOT_PLAIN,
     RejectedError,
     UnsupportedError,
     sequence_refusal,
     string_refusal,
 )
-from medkit_replay.inputs.rosbags_internals import max_sequence_length, unpack_le
+from medkit_replay.inputs.cdr.rosbags_internals import max_sequence_length, unpack_le
 
 if TYPE_CHECKING:
     from collections.abc import Callable

@@ -1,20 +1,20 @@
 """An MCAP file still being written, read to its end and waited for until it is finished.
 
-The scan of :class:`~medkit_replay.inputs.mcap.McapFile` with a wait where its data ends.
+The scan of :class:`~medkit_replay.inputs.mcap.reader.McapFile` with a wait where its data ends.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.mcap import (
+from medkit_replay.inputs.mcap.reader import McapFile
+from medkit_replay.inputs.mcap.records import (
     MAGIC,
     NO_FOOTER,
     OP_CHANNEL,
     OP_HEADER,
-    McapFile,
-    _Cursor,
-    _DamageError,
+    Cursor,
+    DamageError,
 )
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
@@ -23,12 +23,11 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
     from pathlib import Path
 
-    from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.follow import Growing
     from medkit_replay.inputs.merge import Bound, Timed
     from medkit_replay.inputs.ranges import RangeReader
     from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection, Raw
-    from medkit_replay.inputs.watch import Watched
 
 
 class McapTail(McapFile):
@@ -41,21 +40,10 @@ class McapTail(McapFile):
     every opening checks it is still the file first seen (``watched``).
     """
 
-    def __init__(
-        self,
-        path: Path,
-        file_no: int,
-        warn: Warn,
-        *,
-        follow: Follow,
-        done: Callable[[], bool],
-        watched: Watched,
-    ) -> None:
-        self._follow = follow
-        self._done = done
-        self._watched = watched
+    def __init__(self, path: Path, file_no: int, warn: Warn, *, growing: Growing) -> None:
+        self._follow, self._done, self._watched = growing
         self._unfinished = False  # the writer moved on before the file's Data End record
-        super().__init__(path, file_no, warn, source=LocalSource(path, watched.check_open))
+        super().__init__(path, file_no, warn, source=LocalSource(path, self._watched.check_open))
 
     def _probe(self, reader: RangeReader) -> None:
         """Wait for the magic and the header record; nothing else is known before reading."""
@@ -81,8 +69,8 @@ class McapTail(McapFile):
             self._follow.wait()
         self._data_end = self._size
         try:
-            profile = _Cursor(body).string()
-        except _DamageError:
+            profile = Cursor(body).string()
+        except DamageError:
             raise NotABagError("MCAP header record is damaged") from None
         if profile != "ros2":
             self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")

@@ -5,28 +5,27 @@ An uncheckpointed ``-wal`` is read from a temporary copy; a damaged database kee
 
 from __future__ import annotations
 
-import shutil
 import sqlite3
-import struct
 from contextlib import closing
-from pathlib import Path
-from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
-from medkit_replay.files import FileRefusedError, open_regular
+from medkit_replay.files import open_regular
 from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.sqlite.wal import checkpointed_copy
 from medkit_replay.inputs.storage import (
     MESSAGE_SIZE_LIMIT,
     Connection,
     NotABagError,
     Raw,
-    temp_room,
+    StorageFields,
 )
 from medkit_replay.model import Loss
 from medkit_replay.msgdefs import NO_DEFINITION, Definition, normalize_typename
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
+    from pathlib import Path
+    from tempfile import TemporaryDirectory
 
     from medkit_replay.inputs.source import Warn
 
@@ -46,103 +45,6 @@ _SHOWN_IDS = 5
 # A row is read only with an integer id and an integer timestamp in [0, 2^63).
 _GOOD = "typeof(id) = 'integer' AND typeof(timestamp) = 'integer' AND timestamp >= 0"
 _TIME_RULE = "not an integer log time in [0, 2^63)"
-
-
-_WAL_MAGICS = (0x377F0682, 0x377F0683)
-_WAL_VERSION = 3007000
-_WAL_HEADER = 32
-_FRAME_HEADER = 24
-
-
-def _committed_wal_bytes(wal: Path) -> int:
-    """Bytes of a ``-wal`` SQLite would apply: its header and frames up to the last commit.
-
-    SQLite stops at the first frame whose salts differ from the header's (as every hole of
-    a sparse file does), so nothing after it needs copying; 0 when no transaction is there.
-    """
-    with open_regular(wal) as stream:
-        header = stream.read(_WAL_HEADER)
-        if len(header) < _WAL_HEADER:
-            return 0
-        magic, version, page_size, _, *salts = struct.unpack(">6I", header[:24])
-        page_size = 65536 if page_size == 1 else page_size
-        if (
-            magic not in _WAL_MAGICS
-            or version != _WAL_VERSION
-            or not 512 <= page_size <= 65536
-            or page_size & (page_size - 1)
-        ):
-            return 0
-        frame = _FRAME_HEADER + page_size
-        position = end = _WAL_HEADER
-        while True:
-            stream.seek(position)
-            head = stream.read(16)
-            _, commit, *frame_salts = struct.unpack(">4I", head) if len(head) == 16 else (0, 0)
-            if frame_salts != salts or len(stream.read(frame - 16)) != frame - 16:
-                break
-            position += frame
-            if commit:
-                end = position
-        return end if end > _WAL_HEADER else 0
-
-
-def _copy_prefix(source: Path, target: Path, size: int) -> None:
-    with open_regular(source) as stream, target.open("wb") as sink:
-        while size > 0:
-            block = stream.read(min(size, 1 << 20))
-            if not block:
-                break
-            sink.write(block)
-            size -= len(block)
-
-
-def checkpointed_copy(path: Path, warn: Warn) -> tuple[TemporaryDirectory[str], Path] | None:
-    """A temporary copy of ``path`` with its ``-wal`` applied, when the wal holds data.
-
-    ``immutable`` would ignore the wal; applying it in place would write beside the recording.
-    Only the wal's committed frames are copied, and only when they fit the temporary folder.
-    """
-    wal = path.with_name(path.name + "-wal")
-    journal = path.with_name(path.name + "-journal")
-    try:
-        if journal.is_file() and journal.stat().st_size:
-            warn(f"{path}: an unfinished transaction in {journal.name} is not read", Loss())
-        if not wal.exists():
-            return None
-        size = _committed_wal_bytes(wal)
-        database = path.stat().st_size
-    except (OSError, FileRefusedError) as exc:
-        warn(f"{path}: {wal.name} cannot be read ({exc}); its data is not read", Loss())
-        return None
-    if not size:
-        return None
-    if database + size > temp_room():
-        warn(
-            f"{path}: {wal.name} holds data not yet checkpointed, but applying it needs a "
-            f"{database + size:,}-byte copy, more than the temporary folder has room for; "
-            "its data is not read",
-            Loss(bytes=size),
-        )
-        return None
-    folder = TemporaryDirectory(prefix="medkit-replay-")
-    try:
-        copy = Path(folder.name, path.name)
-        shutil.copyfile(path, copy)
-        _copy_prefix(wal, copy.with_name(wal.name), size)
-        with closing(sqlite3.connect(copy)) as db:
-            db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
-    except (OSError, sqlite3.Error) as exc:
-        folder.cleanup()
-        warn(
-            f"{path}: {wal.name} cannot be applied ({exc}); its data is not read", Loss(bytes=size)
-        )
-        return None
-    except BaseException:
-        folder.cleanup()
-        raise
-    warn(f"{path}: {wal.name} holds data not yet checkpointed; read from a copy")
-    return folder, copy
 
 
 def connect_read_only(path: Path, *, immutable: bool, limit: int) -> sqlite3.Connection:
@@ -180,19 +82,13 @@ class _Losses:
             self.ids.append(rowid)
 
 
-class Db3File:
+class Db3File(StorageFields):
     """One ``.db3`` file; see :class:`medkit_replay.inputs.storage.StorageFile`."""
 
     storage = "sqlite3"
 
     def __init__(self, path: Path, file_no: int, warn: Warn) -> None:
-        self.path = path
-        self.file_no = file_no
-        self.warn = warn
-        self.connections: dict[int, Connection] = {}
-        self.counts: dict[int, int] = {}
-        self.start_ns: int | None = None
-        self.end_ns: int | None = None
+        super().__init__(path, file_no, warn)
         self._counted = False
         self._emitted = 0  # wanted messages read: what damage leaves of the rows counted
         self._wanted_ids: set[int] = set()

@@ -20,14 +20,14 @@ from typing import TYPE_CHECKING, Any
 import numpy
 from rosbags.interfaces import Nodetype
 
-from medkit_replay.inputs.cdr_refusals import (
+from medkit_replay.inputs.cdr.refusals import (
     NOT_PLAIN,
     RejectedError,
     UnsupportedError,
     sequence_refusal,
     string_refusal,
 )
-from medkit_replay.inputs.rosbags_internals import (
+from medkit_replay.inputs.cdr.rosbags_internals import (
     SIZEMAP,
     align,
     align_after,
@@ -173,6 +173,24 @@ class Generator:
                 aligned = anext
         out.append(f"{ind}{target} = {cls}({', '.join(values)})")
 
+    def items(
+        self, value: str, count: int | str, ind: str, each: int, typename: str | None
+    ) -> None:
+        """``value`` = a list of ``count`` strings (``typename`` None) or messages, decoded in a
+        loop, ``p`` aligned to ``each`` before every element."""
+        out = self.lines
+        out.append(f"{ind}{value} = []")
+        out.append(f"{ind}for _ in range({count}):")
+        inner = ind + "    "
+        out.extend(_align(each, inner))
+        if typename is None:
+            item = self.var("s")
+            out.extend(self.string(item, inner))
+        else:
+            item = self.var("m")
+            self.message(typename, item, inner)
+        out.append(f"{inner}{value}.append({item})")
+
     def array(self, desc: Any, value: str, ind: str) -> int:
         subdesc, length = desc[1]
         out = self.lines
@@ -181,13 +199,7 @@ class Generator:
             if typ == "string":
                 # A loop, not one block per element: the code stays small whatever the length.
                 # p is 4-aligned before the first element already, so each may align alike.
-                out.append(f"{ind}{value} = []")
-                out.append(f"{ind}for _ in range({length}):")
-                inner = ind + "    "
-                out.extend(_align(4, inner))
-                item = self.var("s")
-                out.extend(self.string(item, inner))
-                out.append(f"{inner}{value}.append({item})")
+                self.items(value, length, ind, 4, None)
                 return 1
             size = length * SIZEMAP[typ] if typ in SIZEMAP else 0
             out.append(
@@ -199,14 +211,7 @@ class Generator:
         if subdesc[0] != Nodetype.NAME:
             raise UnsupportedError(f"array of {subdesc}")
         before, after = align(subdesc, self.store), align_after(subdesc, self.store)
-        out.append(f"{ind}{value} = []")
-        out.append(f"{ind}for _ in range({length}):")
-        inner = ind + "    "
-        if before > after:
-            out.extend(_align(before, inner))
-        item = self.var("m")
-        self.message(subdesc[1], item, inner)
-        out.append(f"{inner}{value}.append({item})")
+        self.items(value, length, ind, before if before > after else 1, subdesc[1])
         return after
 
     def sequence(self, desc: Any, value: str, ind: str, aligned: int) -> int:
@@ -229,13 +234,7 @@ class Generator:
         if subdesc[0] == Nodetype.BASE:
             typ = subdesc[1][0]
             if typ == "string":
-                out.append(f"{ind}{value} = []")
-                out.append(f"{ind}for _ in range({size}):")
-                inner = ind + "    "
-                out.extend(_align(4, inner))
-                item = self.var("s")
-                out.extend(self.string(item, inner))
-                out.append(f"{inner}{value}.append({item})")
+                self.items(value, size, ind, 4, None)
                 aligned = 1
             else:
                 if typ not in _PRIMITIVES:
@@ -251,14 +250,7 @@ class Generator:
                 out.append(f"{ind}p += {size} * {SIZEMAP[typ]}")
                 aligned = before
         elif subdesc[0] == Nodetype.NAME:
-            before = align(subdesc, self.store)
-            out.append(f"{ind}{value} = []")
-            out.append(f"{ind}for _ in range({size}):")
-            inner = ind + "    "
-            out.extend(_align(before, inner))
-            item = self.var("m")
-            self.message(subdesc[1], item, inner)
-            out.append(f"{inner}{value}.append({item})")
+            self.items(value, size, ind, align(subdesc, self.store), subdesc[1])
             aligned = align_after(subdesc, self.store)
         else:
             raise UnsupportedError(f"sequence of {subdesc}")

@@ -1,20 +1,28 @@
-"""A private copy of an SQLite database in WAL mode that a writer is still changing, kept current.
+"""SQLite ``-wal`` files applied to private copies, never beside the database: a finished bag's
+checkpointed copy, and the copy of a database a writer is still changing, kept current.
 
-Only committed, checksum-valid frames of the ``-wal`` are applied, to our copy; nothing beside the
-database is opened for writing, locked or created (no ``-shm``): the writer never waits for us.
+Only committed frames of the ``-wal`` are applied, to our copy; nothing beside the database is
+opened for writing, locked or created (no ``-shm``): the writer never waits for us.
 """
 
 from __future__ import annotations
 
 import shutil
+import sqlite3
 import struct
+from contextlib import closing
+from pathlib import Path
+from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
-from medkit_replay.files import open_regular
+from medkit_replay.files import FileRefusedError, open_regular
+from medkit_replay.inputs.storage import temp_room
+from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
-    from pathlib import Path
     from typing import BinaryIO
+
+    from medkit_replay.inputs.source import Warn
 
 _WAL_MAGICS = (0x377F0682, 0x377F0683)  # checksums in little- or big-endian words
 _WAL_VERSION = 3007000
@@ -33,6 +41,15 @@ def _checksum(data: bytes, sums: tuple[int, int], big: bool) -> tuple[int, int]:
         s1 = (s1 + words[k] + s2) & _MASK
         s2 = (s2 + words[k + 1] + s1) & _MASK
     return s1, s2
+
+
+def _page_size(raw: bytes) -> int | None:
+    """The page size a WAL header declares; None when SQLite would not read it as one."""
+    magic, version, page_size = struct.unpack(">3I", raw[:12])
+    size = 65536 if page_size == 1 else page_size
+    if magic not in _WAL_MAGICS or version != _WAL_VERSION or not 512 <= size <= 65536:
+        return None
+    return None if size & (size - 1) else size
 
 
 class _Header:
@@ -57,11 +74,7 @@ class _Header:
             return None
         if len(raw) < _HEADER:
             return None
-        magic, version, page_size = struct.unpack(">3I", raw[:12])
-        size = 65536 if page_size == 1 else page_size
-        if magic not in _WAL_MAGICS or version != _WAL_VERSION or not 512 <= size <= 65536:
-            return None
-        if size & (size - 1):
+        if _page_size(raw) is None:
             return None
         header = _Header(raw)
         if _checksum(raw[:24], (0, 0), header.big) != header.sums:
@@ -70,6 +83,90 @@ class _Header:
 
     def same(self, other: _Header | None) -> bool:
         return other is not None and other.salts == self.salts and other.sums == self.sums
+
+
+def _committed_wal_bytes(wal: Path) -> int:
+    """Bytes of a ``-wal`` SQLite would apply: its header and frames up to the last commit.
+
+    SQLite stops at the first frame whose salts differ from the header's (as every hole of
+    a sparse file does), so nothing after it needs copying; 0 when no transaction is there.
+    """
+    with open_regular(wal) as stream:
+        header = stream.read(_HEADER)
+        page_size = _page_size(header) if len(header) == _HEADER else None
+        if page_size is None:
+            return 0
+        salts = list(struct.unpack(">2I", header[16:24]))
+        frame = _FRAME_HEADER + page_size
+        position = end = _HEADER
+        while True:
+            stream.seek(position)
+            head = stream.read(16)
+            _, commit, *frame_salts = struct.unpack(">4I", head) if len(head) == 16 else (0, 0)
+            if frame_salts != salts or len(stream.read(frame - 16)) != frame - 16:
+                break
+            position += frame
+            if commit:
+                end = position
+        return end if end > _HEADER else 0
+
+
+def _copy_prefix(source: Path, target: Path, size: int) -> None:
+    with open_regular(source) as stream, target.open("wb") as sink:
+        while size > 0:
+            block = stream.read(min(size, 1 << 20))
+            if not block:
+                break
+            sink.write(block)
+            size -= len(block)
+
+
+def checkpointed_copy(path: Path, warn: Warn) -> tuple[TemporaryDirectory[str], Path] | None:
+    """A temporary copy of ``path`` with its ``-wal`` applied, when the wal holds data.
+
+    ``immutable`` would ignore the wal; applying it in place would write beside the recording.
+    Only the wal's committed frames are copied, and only when they fit the temporary folder.
+    """
+    wal = path.with_name(path.name + "-wal")
+    journal = path.with_name(path.name + "-journal")
+    try:
+        if journal.is_file() and journal.stat().st_size:
+            warn(f"{path}: an unfinished transaction in {journal.name} is not read", Loss())
+        if not wal.exists():
+            return None
+        size = _committed_wal_bytes(wal)
+        database = path.stat().st_size
+    except (OSError, FileRefusedError) as exc:
+        warn(f"{path}: {wal.name} cannot be read ({exc}); its data is not read", Loss())
+        return None
+    if not size:
+        return None
+    if database + size > temp_room():
+        warn(
+            f"{path}: {wal.name} holds data not yet checkpointed, but applying it needs a "
+            f"{database + size:,}-byte copy, more than the temporary folder has room for; "
+            "its data is not read",
+            Loss(bytes=size),
+        )
+        return None
+    folder = TemporaryDirectory(prefix="medkit-replay-")
+    try:
+        copy = Path(folder.name, path.name)
+        shutil.copyfile(path, copy)
+        _copy_prefix(wal, copy.with_name(wal.name), size)
+        with closing(sqlite3.connect(copy)) as db:
+            db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    except (OSError, sqlite3.Error) as exc:
+        folder.cleanup()
+        warn(
+            f"{path}: {wal.name} cannot be applied ({exc}); its data is not read", Loss(bytes=size)
+        )
+        return None
+    except BaseException:
+        folder.cleanup()
+        raise
+    warn(f"{path}: {wal.name} holds data not yet checkpointed; read from a copy")
+    return folder, copy
 
 
 def is_wal_mode(path: Path) -> bool:

@@ -1,5 +1,5 @@
 """Which decoder a recorded type gets: the hand-written DiagnosticArray decoder for the standard
-layout, else one generated from the definition (``cdr_generator``), cached per typestore.
+layout, else one generated from the definition (``cdr.generator``), cached per typestore.
 
 Types the generator does not cover get none: rosbags decodes those.
 """
@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.cdr_diagnostics import (
+from medkit_replay.inputs.cdr.diagnostics import (
     DIAGNOSTIC_ARRAY,
     DiagnosticArrayView,
     diagnostic_array,
     layout,
 )
-from medkit_replay.inputs.cdr_generator import generate
-from medkit_replay.inputs.cdr_refusals import (
+from medkit_replay.inputs.cdr.generator import generate
+from medkit_replay.inputs.cdr.refusals import (
     REFUSALS,
     RejectedError,
     UnsupportedError,

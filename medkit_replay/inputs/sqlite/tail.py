@@ -1,6 +1,6 @@
 """An sqlite3 storage file being written (WAL mode), read commit by commit from a private copy.
 
-Never opens the writer's database for anything but plain reads of its bytes; see inputs/wal.py.
+Never opens the writer's database for anything but plain reads of its bytes; see sqlite/wal.py.
 """
 
 from __future__ import annotations
@@ -13,7 +13,9 @@ from tempfile import TemporaryDirectory
 from typing import TYPE_CHECKING
 
 from medkit_replay.files import open_regular
-from medkit_replay.inputs.db3 import (
+from medkit_replay.inputs.follow import FollowStopped
+from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.sqlite.db3 import (
     _GOOD,
     SCHEMA_VALUE_LIMIT,
     SQLITE_MAGIC,
@@ -21,19 +23,16 @@ from medkit_replay.inputs.db3 import (
     _Losses,
     connect_read_only,
 )
-from medkit_replay.inputs.follow import FollowStopped
-from medkit_replay.inputs.merge import Bound, Timed
+from medkit_replay.inputs.sqlite.wal import WalMirror, is_wal_mode
 from medkit_replay.inputs.storage import MESSAGE_SIZE_LIMIT, NotABagError, Raw, temp_room
-from medkit_replay.inputs.wal import WalMirror, is_wal_mode
 from medkit_replay.model import Loss
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
-    from medkit_replay.inputs.follow import Follow
+    from medkit_replay.inputs.follow import Growing
     from medkit_replay.inputs.source import Warn
     from medkit_replay.inputs.storage import Connection
-    from medkit_replay.inputs.watch import Watched
 
 _ORDER = itemgetter(0, 1)
 _HEADER_BYTES = 100  # an SQLite database header
@@ -51,19 +50,8 @@ class Db3Tail(Db3File):
     first seen (``watched``).
     """
 
-    def __init__(
-        self,
-        path: Path,
-        file_no: int,
-        warn: Warn,
-        *,
-        follow: Follow,
-        done: Callable[[], bool],
-        watched: Watched,
-    ) -> None:
-        self._follow = follow
-        self._done = done
-        self._watched = watched
+    def __init__(self, path: Path, file_no: int, warn: Warn, *, growing: Growing) -> None:
+        self._follow, self._done, self._watched = growing
         self._waited: tuple[int, int] | None = None  # the file when first not readable live
         self._live = False  # read while written
         self._too_large = False  # for a copy in the temporary folder

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import urlsplit
 
 from medkit_replay.errors import InputError
-from medkit_replay.inputs.remote_fetch import (
+from medkit_replay.inputs.remote.fetch import (
     SPEED_LIMIT_ENV,
     SPEED_TIME_ENV,
     Stalled,
@@ -38,7 +38,7 @@ BACKOFF_S = 0.1
 """Wait before the second try; doubled before each further one."""
 SLOW_BUDGET = 2
 """An object is given up once its reads have spent this many times the low-speed time (see
-inputs.remote_fetch) under the speed limit, in all: two stalled tries, or many slow ones (a
+inputs.remote.fetch) under the speed limit, in all: two stalled tries, or many slow ones (a
 server trickling small reads that each end before the time). A minute or so by default."""
 SLOW_GRACE_S = 1.0
 """A try that ends sooner is never counted as slow (a small read over a long round trip)."""

@@ -11,10 +11,10 @@ import struct
 from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.files import open_regular
-from medkit_replay.inputs import rosbag1_records as rec
 from medkit_replay.inputs.decompress import ChunkDamageError, decompress_chunk
 from medkit_replay.inputs.merge import Bound, Timed
-from medkit_replay.inputs.rosbag1_records import RecordDamageError
+from medkit_replay.inputs.ros1 import records as rec
+from medkit_replay.inputs.ros1.records import RecordDamageError
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
 from medkit_replay.model import Loss
 

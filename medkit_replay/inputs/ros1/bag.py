@@ -1,6 +1,6 @@
 """ROS 1 bag inputs (``.bag``): topics selected, decoded into the ROS 2 shapes the bridges read.
 
-Reading the file is rosbag1_file's; this layer chooses and decodes, never touching the file.
+Reading the file is ros1.file's; this layer chooses and decodes, never touching the file.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.errors import InputError
 from medkit_replay.inputs.merge import Timed, reorder_batches
-from medkit_replay.inputs.ros1_decoders import DECODERS
-from medkit_replay.inputs.ros1_messages import TRANSLATIONS, ros1_typestore, standard_md5
-from medkit_replay.inputs.rosbag1_file import Bag1File
+from medkit_replay.inputs.ros1.decoders import DECODERS
+from medkit_replay.inputs.ros1.file import Bag1File
+from medkit_replay.inputs.ros1.messages import TRANSLATIONS, ros1_typestore, standard_md5
 from medkit_replay.inputs.skipped import report_skipped
 from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import NotABagError
@@ -23,8 +23,8 @@ if TYPE_CHECKING:
     from pathlib import Path
 
     from medkit_replay.inputs.merge import Bound
-    from medkit_replay.inputs.rosbag1_file import Raw1
-    from medkit_replay.inputs.rosbag1_records import Ros1Connection
+    from medkit_replay.inputs.ros1.file import Raw1
+    from medkit_replay.inputs.ros1.records import Ros1Connection
     from medkit_replay.inputs.selection import Role
     from medkit_replay.inputs.source import InputContext
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import struct
 from typing import TYPE_CHECKING
 
-from medkit_replay.inputs.ros1_messages import (
+from medkit_replay.inputs.ros1.messages import (
     ROS1_DIAGNOSTIC_ARRAY,
     ROS1_LOG,
     diagnostic_array,

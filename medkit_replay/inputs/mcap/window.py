@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, TypeVar
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator, Sequence
 
-    from medkit_replay.inputs.mcap_plan import ChunkIndex
+    from medkit_replay.inputs.mcap.plan import ChunkIndex
     from medkit_replay.inputs.merge import Position, Timed
 
 T = TypeVar("T")

@@ -1,0 +1,1 @@
+"""CDR payload decoders: generated from definitions, hand-written, their bounds and refusals."""

@@ -1,0 +1,1 @@
+"""rosbag2 sqlite3 storage files: the read-only reader, the WAL copy, and the followed tail."""
