@@ -138,6 +138,43 @@ class ReportRequest:
     origin: Origin = "script"
     topic: str | None = None
 
+    @classmethod
+    def of(cls, *request: *ReportFields) -> ReportRequest:
+        """The request object of a request given field by field."""
+        t_ns, origin, topic, fault_code, event_type, severity, description, source_id = request
+        return cls(
+            t_ns=t_ns,
+            fault_code=fault_code,
+            event_type=event_type,
+            severity=severity,
+            description=description,
+            source_id=source_id,
+            origin=origin,
+            topic=topic,
+        )
+
+    def as_fields(self) -> ReportFields:
+        """This request field by field, for a :class:`ReportSink`."""
+        return (
+            self.t_ns, self.origin, self.topic, self.fault_code, self.event_type, self.severity,
+            self.description, self.source_id,
+        )  # fmt: skip
+
+
+ReportFields = tuple[int, Origin, str | None, str, int, int, str, str]
+"""A ReportFault request as the replay hands it on, field by field (no object per request):
+``(t_ns, origin, topic, fault_code, event_type, severity, description, source_id)``; the one
+spelling of the signature every sink takes."""
+
+
+class ReportSink(Protocol):
+    """Takes one ReportFault request field by field (:data:`ReportFields`): what a bridge
+    reports to. ``FaultManager.report_fields`` is the one that handles it; the others (the
+    double-counting gate, a sweep's fan-out, ``explain``'s tracer, a list) pass it on."""
+
+    def __call__(self, *request: *ReportFields) -> object:
+        """Handle the request (what it returns is not used)."""
+
 
 @spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)

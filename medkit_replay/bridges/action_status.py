@@ -17,8 +17,7 @@ from medkit_replay.releases import Release, default_release
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
 
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin, ReportRequest
+    from medkit_replay.model import Origin, ReportRequest, ReportSink
 
 NODE_NAME = "action_status_bridge"
 STATUS_SUFFIX = "/_action/status"

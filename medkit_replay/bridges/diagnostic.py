@@ -16,8 +16,7 @@ from medkit_replay.model import Severity
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin
+    from medkit_replay.model import Origin, ReportSink
 
 NODE_NAME = "diagnostic_bridge"
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"

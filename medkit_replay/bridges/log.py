@@ -21,8 +21,7 @@ from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import NS_PER_SEC, Severity
 
 if TYPE_CHECKING:
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin
+    from medkit_replay.model import Origin, ReportSink
 
 NODE_NAME = "log_bridge"
 LOG_TYPE = "rcl_interfaces/msg/Log"
@@ -168,8 +167,8 @@ class LogBridge(MessageBridge):
                     f"(report_cooldown_sec {self.config.report_cooldown_sec:g})"
                 )
                 listener.withheld(
-                    t_ns, self.origin, topic, code, 0, severity, log.msg, source_id,
-                    "cooldown", reason,
+                    "cooldown", reason, t_ns, self.origin, topic, code, 0, severity, log.msg,
+                    source_id,
                 )  # fmt: skip
             return
         self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg, report)
