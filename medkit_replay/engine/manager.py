@@ -41,7 +41,8 @@ if TYPE_CHECKING:
 
     from medkit_replay.engine.correlation.engine import CorrelationResult
     from medkit_replay.engine.correlation.rules import CorrelationConfig
-    from medkit_replay.model import Origin, RecordLog, RecordRows, ReportFields
+    from medkit_replay.model import Origin, RecordLog, ReportFields
+    from medkit_replay.rows import RecordRows
 
 _T = TypeVar("_T")
 _EVENT_NAMES = {event.value: event.name for event in EventType}

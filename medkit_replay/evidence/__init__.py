@@ -20,14 +20,10 @@ from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.evidence.plan import Plan
     from medkit_replay.evidence.source import EvidenceSource
-    from medkit_replay.model import (
-        EvidenceRecording,
-        ReportRecord,
-        SnapshotCapture,
-        Transition,
-    )
+    from medkit_replay.model import ReportRecord, Transition
 
 __all__ = [
     "Evidence",

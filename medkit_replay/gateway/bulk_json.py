@@ -25,7 +25,8 @@ from medkit_replay.gateway.faults_json import (
 if TYPE_CHECKING:
     from collections.abc import Collection, Mapping, Sequence
 
-    from medkit_replay.model import EvidenceRecording, FaultSnapshot
+    from medkit_replay.captures import EvidenceRecording
+    from medkit_replay.model import FaultSnapshot
 
 _MIMETYPES = {"mcap": "application/x-mcap", "sqlite3": "application/x-sqlite3"}
 _RECORDING_ID_EXTRA = 32  # a recording id may be this much longer than a fault code

@@ -28,15 +28,9 @@ from medkit_replay.model import NS_PER_SEC, SEVERITY_NAMES
 if TYPE_CHECKING:
     from collections.abc import Collection, Iterable, Mapping, Sequence
 
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.history import CorrelationState
-    from medkit_replay.model import (
-        Cluster,
-        EvidenceRecording,
-        FaultSnapshot,
-        MutedFault,
-        SnapshotCapture,
-        Status,
-    )
+    from medkit_replay.model import Cluster, FaultSnapshot, MutedFault, Status
 
 JsonObject = dict[str, object]
 

@@ -14,10 +14,10 @@ from medkit_replay.gateway.entities import discover
 from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
+    from medkit_replay.captures import SnapshotCapture
     from medkit_replay.evidence.graph import NodeGraph
     from medkit_replay.gateway.entities import Entities
     from medkit_replay.history import FaultHistory
-    from medkit_replay.model import SnapshotCapture
     from medkit_replay.result import Result
 
 NS_PER_SEC = 1_000_000_000

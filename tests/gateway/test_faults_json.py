@@ -11,6 +11,7 @@ from typing import Any
 
 import pytest
 
+from medkit_replay.captures import EvidenceRecording, SnapshotCapture, SnapshotTopic
 from medkit_replay.gateway.errors import GatewayError
 from medkit_replay.gateway.faults_json import (
     StatusFilter,
@@ -27,14 +28,7 @@ from medkit_replay.gateway.faults_json import (
     status_object,
 )
 from medkit_replay.history import CorrelationState
-from medkit_replay.model import (
-    Cluster,
-    EvidenceRecording,
-    FaultSnapshot,
-    MutedFault,
-    SnapshotCapture,
-    SnapshotTopic,
-)
+from medkit_replay.model import Cluster, FaultSnapshot, MutedFault
 from tests.gateway.values import T0, fault, recording
 
 
