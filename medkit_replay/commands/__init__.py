@@ -56,6 +56,32 @@ def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:
     )
 
 
+def path_option(
+    *names: str,
+    help: str,
+    folder: bool = False,
+    default: Path | None = None,
+    show_default: bool | None = None,
+) -> Callable[[FC], FC]:
+    """An option naming one file (``folder``: one folder) to read or write, given as a Path."""
+    return click.option(
+        *names,
+        type=click.Path(path_type=Path, file_okay=not folder, dir_okay=folder),
+        default=default,
+        show_default=show_default,
+        help=help,
+    )
+
+
+JOBS_OPTION = click.option(
+    "--jobs",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: one per CPU; 1 runs in this process).",
+)
+"""``--jobs``: how many worker processes run the replays (one per CPU by default)."""
+
+
 def allow_empty_option() -> Callable[[FC], FC]:
     """``--allow-empty``: a run in which nothing reached the fault manager may hold the budget
     (``check``, ``fleet --budget``, ``sweep --budget``)."""
@@ -84,12 +110,7 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
     """``--jobs``, ``--dask`` and ``--timeout``: where a command running many replays runs them
     (``fleet``, ``sweep``); ``timeout_help`` says what one timed-out unit of work is."""
     options = (
-        click.option(
-            "--jobs",
-            type=click.IntRange(min=1),
-            default=None,
-            help="Worker processes (default: one per CPU; 1 runs in this process).",
-        ),
+        JOBS_OPTION,
         click.option(
             "--dask",
             "dask_address",

@@ -13,7 +13,13 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths, say_written
+from medkit_replay.commands import (
+    config_option,
+    input_argument,
+    local_paths,
+    path_option,
+    say_written,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
@@ -57,18 +63,14 @@ _REPORT_OPTIONS = (
         default=None,
         help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
     ),
-    click.option(
+    path_option(
         "--mcap",
         "mcap_out",
-        type=click.Path(path_type=Path, dir_okay=False),
-        default=None,
         help="Write the replayed FaultEvents and status changes as an MCAP recording.",
     ),
-    click.option(
+    path_option(
         "--html",
         "html_out",
-        type=click.Path(path_type=Path, dir_okay=False),
-        default=None,
         help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
     ),
 )
@@ -87,19 +89,16 @@ ALL_OPTION = click.option(
 @input_argument("inputs")
 @config_option()
 @report_options
-@click.option(
+@path_option(
     "--graph",
     "graph_file",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="The robot's node graph (YAML node -> publishers/subscribers, or `ros2 node info` "
     "text): entity-default freeze frames and entity-scoped recordings need it.",
 )
-@click.option(
+@path_option(
     "--evidence",
     "evidence_dir",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=None,
+    folder=True,
     help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder "
     "(a folder there is replaced only when an earlier run wrote it: .medkit-replay-clip).",
 )

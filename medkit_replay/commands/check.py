@@ -20,6 +20,7 @@ from medkit_replay.commands import (
     config_option,
     input_argument,
     local_paths,
+    path_option,
     say_written,
     strict_option,
 )
@@ -49,12 +50,8 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
     is_flag=True,
     help="Check the inputs as one recording (as analyze does), not each as its own run.",
 )
-@click.option(
-    "--junit",
-    "junit_out",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Write JUnit XML: one testsuite per run, one testcase per rule.",
+@path_option(
+    "--junit", "junit_out", help="Write JUnit XML: one testsuite per run, one testcase per rule."
 )
 @click.option(
     "--github",

@@ -20,6 +20,7 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    path_option,
     say_damage,
     strict_option,
 )
@@ -34,22 +35,17 @@ DEFAULT_OUT = Path("fleet-report")
 @config_option(
     "ROS 2 parameter file for every run (repeatable; later files override earlier ones)."
 )
-@click.option(
-    "--budget",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Fault budget YAML checked on every run (the budget column).",
-)
+@path_option("--budget", help="Fault budget YAML checked on every run (the budget column).")
 @allow_empty_option()
 @executor_options(
     "Kill a run that takes longer and report it as failed (runs in worker processes)."
 )
-@click.option(
+@path_option(
     "--out",
     "out_dir",
-    type=click.Path(path_type=Path, file_okay=False),
     default=DEFAULT_OUT,
     show_default=True,
+    folder=True,
     help="Folder for runs.csv/.json, codes.csv/.json and index.html.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")

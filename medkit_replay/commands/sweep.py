@@ -19,6 +19,7 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    path_option,
     say_damage,
     say_written,
     strict_option,
@@ -39,27 +40,21 @@ from medkit_replay.outputs.console import warn
     metavar="NODE.PARAM=V1,V2,...",
     help="A parameter and its values (repeatable: the grid is every combination).",
 )
-@click.option(
-    "--budget",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Fault budget YAML checked on every variant x input (the budget columns).",
+@path_option(
+    "--budget", help="Fault budget YAML checked on every variant x input (the budget columns)."
 )
 @allow_empty_option()
 @executor_options("Kill a job (one input, a share of the grid) that takes longer; its rows say so.")
-@click.option(
+@path_option(
     "--out",
     "out_dir",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=None,
+    folder=True,
     help="Folder for the tables (runs, run_codes, variants, codes; CSV and Parquet) and a "
     "parameter file per variant (variants/v01.yaml...).",
 )
-@click.option(
+@path_option(
     "--html",
     "html_path",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
 )
 @click.option(
