@@ -13,10 +13,11 @@ from typing import TYPE_CHECKING
 
 import click
 
+from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import is_remote
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable
+    from collections.abc import Callable, Iterable, Iterator
 
     from click.decorators import FC
 
@@ -146,6 +147,18 @@ STRICT_HELP = (
 def strict_option() -> Callable[[FC], FC]:
     """``--strict``: damage fails the check (``check``; ``fleet``, ``sweep`` with a budget)."""
     return click.option("--strict", is_flag=True, help=STRICT_HELP)
+
+
+@contextlib.contextmanager
+def writing(what: str, path: Path | str | None) -> Iterator[None]:
+    """Writing ``what`` (an output a command writes) to ``path``: an OSError becomes the one
+    line that names the file (exit status 2), never a traceback."""
+    try:
+        yield
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot write {what}: {err.strerror or err}", path=str(path)
+        ) from None
 
 
 def say_written(paths: Iterable[Path | str], *, quiet: bool = False) -> None:

@@ -19,6 +19,7 @@ from medkit_replay.commands import (
     local_paths,
     path_option,
     say_written,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
@@ -226,14 +227,10 @@ def write_reports(
 
     def job(output: FileOutput, target: Path, writer: Callable[[Result, Path], object]) -> Job:
         def write() -> None:
-            try:
+            with writing(output.label, target):
                 if output.files is None:  # a file: its folder is made, as --csv makes its own
                     target.parent.mkdir(parents=True, exist_ok=True)
                 writer(result, target)
-            except OSError as err:
-                raise MedkitReplayError(
-                    f"cannot write {output.label}: {err.strerror or err}", path=str(target)
-                ) from None
 
         return output.label, write
 
@@ -253,13 +250,9 @@ def write_reports(
             with standard_output("the report"):
                 write_report_stdout(result, ahead)
         elif json_out is not None:
-            try:
+            with writing("report", json_out):
                 Path(json_out).parent.mkdir(parents=True, exist_ok=True)
                 write_report(result, Path(json_out), ahead)
-            except OSError as err:
-                raise MedkitReplayError(
-                    f"cannot write report: {err.strerror or err}", path=json_out
-                ) from None
     if json_out is None or not chosen:
         for _, write in jobs:
             write()

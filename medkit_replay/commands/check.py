@@ -23,6 +23,7 @@ from medkit_replay.commands import (
     path_option,
     say_written,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
@@ -121,12 +122,8 @@ def check(
     with standard_output("the check's results"):
         print_conclusion(runs, sys.stdout)
     if junit_out is not None:
-        try:
+        with writing("JUnit XML", junit_out):
             write_junit(runs, junit_out)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write JUnit XML: {err.strerror}", path=str(junit_out)
-            ) from None
     if github:
         _github(runs)
     if junit_out is not None:

@@ -23,6 +23,7 @@ from medkit_replay.commands import (
     path_option,
     say_damage,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -137,12 +138,8 @@ def fleet(
                 recordings, configs, budget=parsed_budget, jobs=jobs, timeout=timeout, on_done=bar
             )
     runs, texts = tabulated(runs)
-    try:
+    with writing("the fleet report", out_dir):
         write_texts(texts, out_dir)
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot write the fleet report: {err.strerror}", path=str(out_dir)
-        ) from None
     if not quiet:
         with standard_output("the fleet summary"):
             print_summary(runs, sys.stdout, out_dir, release)

@@ -22,6 +22,7 @@ from medkit_replay.commands import (
     local_paths,
     path_option,
     say_written,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -148,12 +149,8 @@ def suggest_rules(
     text = rules_yaml(suggestion)
     report = sys.stdout if out_path is not None else sys.stderr
     if out_path is not None:
-        try:
+        with writing("the rules", out_path):
             write_text_atomic(out_path, text)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write the rules: {err.strerror}", path=str(out_path)
-            ) from None
         say_written([out_path])
     else:
         with standard_output("the rules"):

@@ -23,6 +23,7 @@ from medkit_replay.commands import (
     say_damage,
     say_written,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -162,32 +163,23 @@ def sweep(
     workers = 1 if dask_address is None and jobs == 1 else (jobs or default_jobs())
     plan = plan_jobs(recordings, configs, grid.variants, parsed_budget, workers)
     bar = fleet_progress(sys.stderr, len(plan), quiet=quiet)
-    try:
-        with bar if bar is not None else nullcontext():
-            outcome = run_sweep(
-                plan,
-                grid,
-                out_dir,
-                jobs=workers,
-                dask_address=dask_address,
-                timeout=timeout,
-                parquet=parquet,
-                on_done=bar,
-            )
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot write the sweep tables: {err.strerror}", path=str(out_dir)
-        ) from None
+    with writing("the sweep tables", out_dir), bar if bar is not None else nullcontext():
+        outcome = run_sweep(
+            plan,
+            grid,
+            out_dir,
+            jobs=workers,
+            dask_address=dask_address,
+            timeout=timeout,
+            parquet=parquet,
+            on_done=bar,
+        )
     if html_path is not None:
         from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
 
-        try:
+        with writing("the page", html_path):
             html_path.parent.mkdir(parents=True, exist_ok=True)
             write_page(html_path, grid, outcome, len(recordings))
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write the page: {err.strerror}", path=str(html_path)
-            ) from None
     if not quiet:
         with standard_output("the sweep summary"):
             parts = summary_renderables(
