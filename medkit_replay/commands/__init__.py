@@ -9,7 +9,7 @@ import contextlib
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import click
 
@@ -57,20 +57,26 @@ def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:
     )
 
 
+PathKind = Literal["file", "folder", "any"]
+
+_PATH_TYPES: dict[PathKind, click.Path] = {
+    "file": click.Path(path_type=Path, dir_okay=False),
+    "folder": click.Path(path_type=Path, file_okay=False),
+    "any": click.Path(path_type=Path),
+}
+
+
 def path_option(
     *names: str,
     help: str,
-    folder: bool = False,
+    kind: PathKind = "file",
     default: Path | None = None,
     show_default: bool | None = None,
 ) -> Callable[[FC], FC]:
-    """An option naming one file (``folder``: one folder) to read or write, given as a Path."""
+    """An option naming one file, one folder or any path (``kind``) to read or write, given as
+    a Path."""
     return click.option(
-        *names,
-        type=click.Path(path_type=Path, file_okay=not folder, dir_okay=folder),
-        default=default,
-        show_default=show_default,
-        help=help,
+        *names, type=_PATH_TYPES[kind], default=default, show_default=show_default, help=help
     )
 
 
@@ -107,6 +113,17 @@ def _timeout_seconds(
     return value
 
 
+def stacked(*options: Callable[[FC], FC]) -> Callable[[FC], FC]:
+    """Several options as one decorator, listed in ``--help`` in the order given."""
+
+    def decorate(command: FC) -> FC:
+        for option in reversed(options):
+            command = option(command)
+        return command
+
+    return decorate
+
+
 def executor_options(timeout_help: str) -> Callable[[FC], FC]:
     """``--jobs``, ``--dask`` and ``--timeout``: where a command running many replays runs them
     (``fleet``, ``sweep``); ``timeout_help`` says what one timed-out unit of work is."""
@@ -129,13 +146,7 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
             help=timeout_help,
         ),
     )
-
-    def decorate(command: FC) -> FC:
-        for option in reversed(options):
-            command = option(command)
-        return command
-
-    return decorate
+    return stacked(*options)
 
 
 STRICT_HELP = (

@@ -19,6 +19,7 @@ from medkit_replay.commands import (
     local_paths,
     path_option,
     say_written,
+    stacked,
     writing,
 )
 from medkit_replay.commands.streams import standard_output
@@ -28,17 +29,8 @@ from medkit_replay.outputs import OUTPUTS, FileOutput
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
-    from click.decorators import FC
-
     from medkit_replay.outputs.json_report import EncodedAhead
     from medkit_replay.result import Result
-
-
-def report_options(command: FC) -> FC:
-    """The options naming the report files ``analyze`` (and ``follow``) write."""
-    for option in reversed(_REPORT_OPTIONS):
-        command = option(command)
-    return command
 
 
 _REPORT_OPTIONS = (
@@ -50,18 +42,13 @@ _REPORT_OPTIONS = (
         metavar="FILE|-",
         help="Write the JSON report here ('-': standard output; FILE.gz or FILE.zst compressed).",
     ),
-    click.option(
-        "--csv",
-        "csv_dir",
-        type=click.Path(path_type=Path),
-        default=None,
-        help="Write every report table as CSV into this directory.",
+    path_option(
+        "--csv", "csv_dir", kind="any", help="Write every report table as CSV into this directory."
     ),
-    click.option(
+    path_option(
         "--parquet",
         "parquet_dir",
-        type=click.Path(path_type=Path),
-        default=None,
+        kind="any",
         help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
     ),
     path_option(
@@ -75,6 +62,9 @@ _REPORT_OPTIONS = (
         help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
     ),
 )
+
+report_options = stacked(*_REPORT_OPTIONS)
+"""The options naming the report files ``analyze`` (and ``follow``) write."""
 
 
 ALL_OPTION = click.option(
@@ -99,7 +89,7 @@ ALL_OPTION = click.option(
 @path_option(
     "--evidence",
     "evidence_dir",
-    folder=True,
+    kind="folder",
     help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder "
     "(a folder there is replaced only when an earlier run wrote it: .medkit-replay-clip).",
 )

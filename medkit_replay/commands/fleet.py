@@ -46,7 +46,7 @@ DEFAULT_OUT = Path("fleet-report")
     "out_dir",
     default=DEFAULT_OUT,
     show_default=True,
-    folder=True,
+    kind="folder",
     help="Folder for runs.csv/.json, codes.csv/.json and index.html.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")

@@ -49,7 +49,7 @@ def _finite(_ctx: click.Context, param: click.Parameter, value: float | None) ->
 @path_option(
     "--evidence",
     "evidence_dir",
-    folder=True,
+    kind="folder",
     help="Write the black-box recordings here, as analyze does, and serve them as bulk data "
     "(by default they go to a temporary folder removed when the server stops).",
 )

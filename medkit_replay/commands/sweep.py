@@ -49,7 +49,7 @@ from medkit_replay.outputs.console import warn
 @path_option(
     "--out",
     "out_dir",
-    folder=True,
+    kind="folder",
     help="Folder for the tables (runs, run_codes, variants, codes; CSV and Parquet) and a "
     "parameter file per variant (variants/v01.yaml...).",
 )
