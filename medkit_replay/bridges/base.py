@@ -81,6 +81,21 @@ class MessageBridge:
         return requests
 
 
+class TopicBridge(MessageBridge):
+    """A bridge node that subscribes to one topic named relative to itself and reports through
+    one FaultReporter per source, the least recently used dropped beyond ``capacity`` (the
+    diagnostic and log bridges)."""
+
+    origin: Origin
+
+    def __init__(
+        self, node_fqn: str, topic: str, capacity: int, filter_config: LocalFilterConfig
+    ) -> None:
+        self.node_fqn = node_fqn
+        self.topic = resolve_topic(topic, node_fqn)
+        self.reporters = ReporterCache(capacity, filter_config, origin=self.origin)
+
+
 class FaultReporter:
     """One upstream FaultReporter: a fixed source_id and its own LocalFilter.
 

@@ -9,11 +9,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.bridges.base import (
-    MessageBridge,
-    ReporterCache,
+    TopicBridge,
     any_substring,
     passes_lists,
-    resolve_topic,
     withheld_listener,
 )
 from medkit_replay.bridges.codes import log_fault_code
@@ -89,7 +87,7 @@ def map_level_to_severity(level: int, severity_floor: int) -> int | None:
     return int(Severity.ERROR)
 
 
-class LogBridge(MessageBridge):
+class LogBridge(TopicBridge):
     """Mirrors upstream node ``log_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §3).
 
     Each Log message at or above the floor becomes a FAILED report from the logging node, coded
@@ -106,10 +104,11 @@ class LogBridge(MessageBridge):
         self, config: LogBridgeConfig | None = None, *, node_fqn: str = "/" + NODE_NAME
     ) -> None:
         self.config = config or LogBridgeConfig()
-        self.node_fqn = node_fqn
-        self.topic = resolve_topic(self.config.rosout_topic, node_fqn)
-        self.reporters = ReporterCache(
-            self.config.max_tracked_nodes, self.config.local_filter, origin=self.origin
+        super().__init__(
+            node_fqn,
+            self.config.rosout_topic,
+            self.config.max_tracked_nodes,
+            self.config.local_filter,
         )
         # rclcpp::Duration::from_seconds truncates toward zero.
         self._cooldown_ns = int(self.config.report_cooldown_sec * NS_PER_SEC)
