@@ -1,17 +1,18 @@
 """Values that cross layers: requests into the engine, records out of it.
 
-Neutral ground: every layer may import this module; it imports nothing of ours.
+Neutral ground: every layer may import this module; of ours it imports only the row codec (rows).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from enum import IntEnum
-from operator import attrgetter
-from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeVar, get_args
+from typing import TYPE_CHECKING, Literal, Protocol, TypeVar, get_args
+
+from medkit_replay.rows import RecordRows, spoolable
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Iterator
+    from collections.abc import Iterable, Iterator
 
 Origin = Literal[
     "report_fault", "diagnostic_bridge", "action_status_bridge", "log_bridge", "script"
@@ -24,69 +25,6 @@ STATUSES: tuple[Status, ...] = get_args(Status)
 """Every fault status, in the order the debounce moves through them."""
 EVENT_KINDS: tuple[EventKind, ...] = get_args(EventKind)
 """Every FaultEvent type upstream publishes."""
-
-_R = TypeVar("_R")
-
-
-def _restore(cls: type[_R], names: tuple[str, ...], values: tuple[object, ...]) -> _R:
-    record = object.__new__(cls)
-    for name, value in zip(names, values, strict=True):
-        object.__setattr__(record, name, value)
-    return record
-
-
-def spoolable(cls: type[_R]) -> type[_R]:
-    """Give a frozen record class a flat pickle form.
-
-    The dataclass default looks its fields up on every object, which dominated the cost of
-    spooling millions of records to disk; this does the lookup once per class.
-    """
-    names = tuple(f.name for f in fields(cls))  # type: ignore[arg-type]  # a dataclass
-
-    def reduce(self: _R) -> tuple[object, ...]:
-        return (_restore, (cls, names, tuple([getattr(self, n) for n in names])))
-
-    cls.__reduce__ = reduce  # type: ignore[method-assign,assignment]
-    return cls
-
-
-class RecordRows(Generic[_R]):
-    """A record class's row form for spools: its fields in declaration order, as one flat tuple.
-
-    A nested record (a FaultEvent's snapshot) has its fields spliced in where it stands (flat
-    rows pickle faster). The engine's hot path builds rows directly; ``decode`` rebuilds the
-    record when a spool is read. ``names`` are the row's fields, nested ones included.
-    """
-
-    def __init__(
-        self, cls: type[_R], nested: tuple[str, RecordRows[FaultSnapshot]] | None = None
-    ) -> None:
-        self.cls = cls
-        self.fields: tuple[str, ...] = tuple(f.name for f in fields(cls))  # type: ignore[arg-type]
-        self._get: Callable[[_R], tuple[object, ...]] = attrgetter(*self.fields)
-        self._nested: tuple[int, RecordRows[FaultSnapshot]] | None = None
-        self.names = self.fields
-        if nested is not None:
-            at = self.fields.index(nested[0])
-            self._nested = (at, nested[1])
-            self.names = (*self.fields[:at], *nested[1].names, *self.fields[at + 1 :])
-
-    def encode(self, item: _R, /) -> tuple[object, ...]:
-        """The record's row."""
-        row = self._get(item)
-        if self._nested is None:
-            return row
-        at, rows = self._nested
-        return (*row[:at], *rows.encode(row[at]), *row[at + 1 :])  # type: ignore[arg-type]
-
-    def decode(self, row: tuple[object, ...], /) -> _R:
-        """The record a row stands for."""
-        if self._nested is not None:
-            at, rows = self._nested
-            end = at + len(rows.names)
-            row = (*row[:at], rows.decode(row[at:end]), *row[end:])
-        return _restore(self.cls, self.fields, row)
-
 
 NS_PER_SEC = 1_000_000_000
 NS_PER_MS = 1_000_000
@@ -137,6 +75,43 @@ class ReportRequest:
     source_id: str
     origin: Origin = "script"
     topic: str | None = None
+
+    @classmethod
+    def of(cls, *request: *ReportFields) -> ReportRequest:
+        """The request object of a request given field by field."""
+        t_ns, origin, topic, fault_code, event_type, severity, description, source_id = request
+        return cls(
+            t_ns=t_ns,
+            fault_code=fault_code,
+            event_type=event_type,
+            severity=severity,
+            description=description,
+            source_id=source_id,
+            origin=origin,
+            topic=topic,
+        )
+
+    def as_fields(self) -> ReportFields:
+        """This request field by field, for a :class:`ReportSink`."""
+        return (
+            self.t_ns, self.origin, self.topic, self.fault_code, self.event_type, self.severity,
+            self.description, self.source_id,
+        )  # fmt: skip
+
+
+ReportFields = tuple[int, Origin, str | None, str, int, int, str, str]
+"""A ReportFault request as the replay hands it on, field by field (no object per request):
+``(t_ns, origin, topic, fault_code, event_type, severity, description, source_id)``; the one
+spelling of the signature every sink takes."""
+
+
+class ReportSink(Protocol):
+    """Takes one ReportFault request field by field (:data:`ReportFields`): what a bridge
+    reports to. ``FaultManager.report_fields`` is the one that handles it; the others (the
+    double-counting gate, a sweep's fan-out, ``explain``'s tracer, a list) pass it on."""
+
+    def __call__(self, *request: *ReportFields) -> object:
+        """Handle the request (what it returns is not used)."""
 
 
 @spoolable
@@ -478,60 +453,3 @@ class Progress:
         if self.end_ns <= self.start_ns:
             return 0.0
         return min(max((self.t_ns - self.start_ns) / (self.end_ns - self.start_ns), 0.0), 1.0)
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class SnapshotTopic:
-    """One topic's value in a freeze frame: the message as upstream's serializer renders it."""
-
-    topic: str
-    message_type: str
-    message_t_ns: int
-    data: object
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class SnapshotCapture:
-    """One freeze-frame capture the live manager would have run at a report-driven confirmation.
-
-    ``retained``: its rows would still be stored at the end (not dropped on clear, not evicted
-    by ``max_per_fault``); ``freeze_frame``: it is the fault's compact freeze frame at the end.
-    """
-
-    fault_code: str
-    capture_id: int
-    t_ns: int
-    retained: bool
-    freeze_frame: bool
-    topics: tuple[SnapshotTopic, ...]
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class RecordingTopic:
-    """One topic of a black-box recording."""
-
-    topic: str
-    type: str
-    messages: int
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class EvidenceRecording:
-    """One black-box recording (rosbag2 folder) the live manager would have written.
-
-    ``fault_codes``: the primary fault first, then those that confirmed in its post-roll;
-    ``bytes``: the payload bytes of its messages; ``deleted_ns``/``deleted_reason``: when and
-    why the live manager would have deleted it (None: it would still hold it at the end);
-    ``path``: where it was written, or None.
-    """
-
-    recording_id: str
-    fault_codes: tuple[str, ...]
-    start_ns: int
-    end_ns: int
-    topics: tuple[RecordingTopic, ...]
-    messages: int
-    bytes: int
-    deleted_ns: int | None
-    deleted_reason: str | None
-    path: str | None

@@ -14,10 +14,10 @@ from medkit_replay.releases import DEFAULT_RELEASE, RELEASES
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.model import (
         ClearRecord,
         Cluster,
-        EvidenceRecording,
         FaultEvent,
         FaultSnapshot,
         InputSummary,
@@ -26,7 +26,6 @@ if TYPE_CHECKING:
         NearMiss,
         ReportRecord,
         RetroactiveMute,
-        SnapshotCapture,
         Transition,
     )
 

@@ -17,8 +17,7 @@ from medkit_replay.releases import Release, default_release
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
 
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin, ReportRequest
+    from medkit_replay.model import Origin, ReportFields, ReportRequest, ReportSink
 
 NODE_NAME = "action_status_bridge"
 STATUS_SUFFIX = "/_action/status"
@@ -285,6 +284,6 @@ class ActionStatusBridge(MessageBridge):
             state.reporter.report_passed(t_ns, state.topic, state.canceled_code, report)
 
 
-def _lost(*_request: object) -> None:
+def _lost(*_request: *ReportFields) -> None:
     """A ReportSink for requests sent while the manager's service is not discovered: the
     reporter's local filter has counted each, and its client drops it (``send_report``)."""

@@ -14,28 +14,10 @@ from medkit_replay.model import EventType, ReportRequest
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-    from medkit_replay.model import Origin
+    from medkit_replay.model import Origin, ReportFields, ReportSink
 
 
 _FAILED, _PASSED = int(EventType.FAILED), int(EventType.PASSED)
-
-
-class ReportSink(Protocol):
-    """Takes one forwarded ReportFault request field by field (``FaultManager.report_fields``)."""
-
-    def __call__(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        fault_code: str,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-        /,
-    ) -> object:
-        """Handle the request (what it returns is not used)."""
 
 
 class WithheldSink(Protocol):
@@ -45,20 +27,7 @@ class WithheldSink(Protocol):
     (:func:`withheld_listener`).
     """
 
-    def withheld(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        fault_code: str,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-        stage: str,
-        reason: str,
-        /,
-    ) -> None:
+    def withheld(self, stage: str, reason: str, *request: *ReportFields) -> None:
         """Note one request that did not reach the manager (``stage``: what held it)."""
 
 
@@ -94,30 +63,8 @@ class Bridge(Protocol):
 class RequestList(list[ReportRequest]):
     """A ReportSink that keeps the requests as objects, for callers that want a list."""
 
-    def __call__(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        fault_code: str,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-        /,
-    ) -> None:
-        self.append(
-            ReportRequest(
-                t_ns=t_ns,
-                fault_code=fault_code,
-                event_type=event_type,
-                severity=severity,
-                description=description,
-                source_id=source_id,
-                origin=origin,
-                topic=topic,
-            )
-        )
+    def __call__(self, *request: *ReportFields) -> None:
+        self.append(ReportRequest.of(*request))
 
 
 class MessageBridge:
@@ -132,6 +79,21 @@ class MessageBridge:
         requests = RequestList()
         self.feed(t_ns, topic, msg, requests)
         return requests
+
+
+class TopicBridge(MessageBridge):
+    """A bridge node that subscribes to one topic named relative to itself and reports through
+    one FaultReporter per source, the least recently used dropped beyond ``capacity`` (the
+    diagnostic and log bridges)."""
+
+    origin: Origin
+
+    def __init__(
+        self, node_fqn: str, topic: str, capacity: int, filter_config: LocalFilterConfig
+    ) -> None:
+        self.node_fqn = node_fqn
+        self.topic = resolve_topic(topic, node_fqn)
+        self.reporters = ReporterCache(capacity, filter_config, origin=self.origin)
 
 
 class FaultReporter:
@@ -203,8 +165,8 @@ class FaultReporter:
             f"{config.default_window_sec:g} s"
         )
         listener.withheld(
-            t_ns, self.origin, topic, fault_code, event_type, severity, description,
-            self.source_id, "local_filter", reason,
+            "local_filter", reason,
+            t_ns, self.origin, topic, fault_code, event_type, severity, description, self.source_id,
         )  # fmt: skip
 
 

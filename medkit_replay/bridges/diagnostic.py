@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, cast
 
-from medkit_replay.bridges.base import MessageBridge, ReporterCache, resolve_topic
+from medkit_replay.bridges.base import TopicBridge
 from medkit_replay.bridges.codes import upper_snake
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import Severity
@@ -16,8 +16,7 @@ from medkit_replay.model import Severity
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin
+    from medkit_replay.model import Origin, ReportSink
 
 NODE_NAME = "diagnostic_bridge"
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
@@ -86,7 +85,7 @@ def is_ok_level(level: int) -> bool:
     return level == LEVEL_OK
 
 
-class DiagnosticBridge(MessageBridge):
+class DiagnosticBridge(TopicBridge):
     """Mirrors upstream node ``diagnostic_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §2).
 
     Each DiagnosticStatus of each array, in order, is mapped to a code and a source and goes
@@ -102,10 +101,11 @@ class DiagnosticBridge(MessageBridge):
         self, config: DiagnosticBridgeConfig | None = None, *, node_fqn: str = "/" + NODE_NAME
     ) -> None:
         self.config = config or DiagnosticBridgeConfig()
-        self.node_fqn = node_fqn
-        self.topic = resolve_topic(self.config.diagnostics_topic, node_fqn)
-        self.reporters = ReporterCache(
-            self.config.max_tracked_sources, self.config.local_filter, origin=self.origin
+        super().__init__(
+            node_fqn,
+            self.config.diagnostics_topic,
+            self.config.max_tracked_sources,
+            self.config.local_filter,
         )
         self._plans: dict[Head, Plan] = {}
 

@@ -9,11 +9,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, cast
 
 from medkit_replay.bridges.base import (
-    MessageBridge,
-    ReporterCache,
+    TopicBridge,
     any_substring,
     passes_lists,
-    resolve_topic,
     withheld_listener,
 )
 from medkit_replay.bridges.codes import log_fault_code
@@ -21,8 +19,7 @@ from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.model import NS_PER_SEC, Severity
 
 if TYPE_CHECKING:
-    from medkit_replay.bridges.base import ReportSink
-    from medkit_replay.model import Origin
+    from medkit_replay.model import Origin, ReportSink
 
 NODE_NAME = "log_bridge"
 LOG_TYPE = "rcl_interfaces/msg/Log"
@@ -90,7 +87,7 @@ def map_level_to_severity(level: int, severity_floor: int) -> int | None:
     return int(Severity.ERROR)
 
 
-class LogBridge(MessageBridge):
+class LogBridge(TopicBridge):
     """Mirrors upstream node ``log_bridge`` (ros2_medkit 0.6.0 @ 505bc2d5, bridges.md §3).
 
     Each Log message at or above the floor becomes a FAILED report from the logging node, coded
@@ -107,10 +104,11 @@ class LogBridge(MessageBridge):
         self, config: LogBridgeConfig | None = None, *, node_fqn: str = "/" + NODE_NAME
     ) -> None:
         self.config = config or LogBridgeConfig()
-        self.node_fqn = node_fqn
-        self.topic = resolve_topic(self.config.rosout_topic, node_fqn)
-        self.reporters = ReporterCache(
-            self.config.max_tracked_nodes, self.config.local_filter, origin=self.origin
+        super().__init__(
+            node_fqn,
+            self.config.rosout_topic,
+            self.config.max_tracked_nodes,
+            self.config.local_filter,
         )
         # rclcpp::Duration::from_seconds truncates toward zero.
         self._cooldown_ns = int(self.config.report_cooldown_sec * NS_PER_SEC)
@@ -168,8 +166,8 @@ class LogBridge(MessageBridge):
                     f"(report_cooldown_sec {self.config.report_cooldown_sec:g})"
                 )
                 listener.withheld(
-                    t_ns, self.origin, topic, code, 0, severity, log.msg, source_id,
-                    "cooldown", reason,
+                    "cooldown", reason, t_ns, self.origin, topic, code, 0, severity, log.msg,
+                    source_id,
                 )  # fmt: skip
             return
         self.reporters.get(source_id).report(t_ns, topic, code, severity, log.msg, report)

@@ -7,7 +7,7 @@ no I/O, no clock. The exact meaning of every rule is documented in docs/budgets.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from medkit_replay.checks.budget import (
     SEVERITIES,
@@ -30,9 +30,9 @@ from medkit_replay.releases import DEFAULT_RELEASE
 from medkit_replay.text import seconds, severity_name
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Callable, Iterable, Sequence
 
-    from medkit_replay.checks.budget import Budget, Rule
+    from medkit_replay.checks.budget import Budget, Rule, RuleSpec
     from medkit_replay.checks.facts import FormedCluster
     from medkit_replay.model import Loss
     from medkit_replay.result import Result
@@ -178,27 +178,6 @@ def _sorted(offenders: Iterable[Offender]) -> tuple[Offender, ...]:
 
 
 # -- the rules ---------------------------------------------------------------------------------
-
-
-def _verdict(rule: Rule, facts: Facts) -> Verdict:
-    spec = rule.spec
-    if isinstance(spec, MaxConfirmed):
-        return _max_confirmed(rule, spec, facts)
-    if isinstance(spec, NeverConfirm):
-        return _never_confirm(rule, spec, facts)
-    if isinstance(spec, AllowConfirm):
-        return _allow_confirm(rule, spec, facts)
-    if isinstance(spec, MaxOccurrences):
-        return _max_occurrences(rule, spec, facts)
-    if isinstance(spec, MaxConfirmedDuration):
-        return _max_duration(rule, spec, facts)
-    if isinstance(spec, ResolvedByEnd):
-        return _resolved_by_end(rule, spec, facts)
-    if isinstance(spec, ExpectConfirmed):
-        return _expect_confirmed(rule, spec, facts)
-    if isinstance(spec, ExpectNotConfirmed):
-        return _expect_not_confirmed(rule, spec, facts)
-    return _expect_cluster(rule, spec, facts)
 
 
 def _severity_of(facts: Facts, code: str) -> int:
@@ -428,3 +407,21 @@ def _expect_cluster(rule: Rule, spec: ExpectCluster, facts: Facts) -> Verdict:
         True,
         f"{cluster.cluster_id} formed{when} (rule {cluster.rule_id}: {members})",
     )
+
+
+_VERDICTS: dict[type[RuleSpec], Callable[[Rule, Any, Facts], Verdict]] = {
+    MaxConfirmed: _max_confirmed,
+    NeverConfirm: _never_confirm,
+    AllowConfirm: _allow_confirm,
+    MaxOccurrences: _max_occurrences,
+    MaxConfirmedDuration: _max_duration,
+    ResolvedByEnd: _resolved_by_end,
+    ExpectConfirmed: _expect_confirmed,
+    ExpectNotConfirmed: _expect_not_confirmed,
+    ExpectCluster: _expect_cluster,
+}
+"""The verdict of each kind of rule, by the type of its spec."""
+
+
+def _verdict(rule: Rule, facts: Facts) -> Verdict:
+    return _VERDICTS[type(rule.spec)](rule, rule.spec, facts)

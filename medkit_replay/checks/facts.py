@@ -52,14 +52,7 @@ class Facts:
     """Confirmations, CONFIRMED stretches, final states, muting and clusters of one Result."""
 
     def __init__(self, result: Result) -> None:
-        starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
-        ends = [i.end_ns for i in result.inputs if i.end_ns is not None]
-        if result.summary.start_ns is not None:
-            starts.append(result.summary.start_ns)
-        if result.summary.end_ns is not None:
-            ends.append(result.summary.end_ns)
-        self.start_ns: int | None = min(starts, default=None)
-        self.end_ns: int | None = max(ends, default=None)
+        self.start_ns, self.end_ns = result.span()
         self.faults: dict[str, FaultSnapshot] = {f.fault_code: f for f in result.faults}
         self.confirmations: dict[str, list[int]] = {}
         self.stretches: dict[str, list[tuple[int, int, bool]]] = {}

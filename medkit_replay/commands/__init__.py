@@ -9,14 +9,15 @@ import contextlib
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import click
 
+from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import is_remote
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable
+    from collections.abc import Callable, Iterable, Iterator
 
     from click.decorators import FC
 
@@ -56,6 +57,38 @@ def config_option(help_text: str = CONFIG_HELP) -> Callable[[FC], FC]:
     )
 
 
+PathKind = Literal["file", "folder", "any"]
+
+_PATH_TYPES: dict[PathKind, click.Path] = {
+    "file": click.Path(path_type=Path, dir_okay=False),
+    "folder": click.Path(path_type=Path, file_okay=False),
+    "any": click.Path(path_type=Path),
+}
+
+
+def path_option(
+    *names: str,
+    help: str,
+    kind: PathKind = "file",
+    default: Path | None = None,
+    show_default: bool | None = None,
+) -> Callable[[FC], FC]:
+    """An option naming one file, one folder or any path (``kind``) to read or write, given as
+    a Path."""
+    return click.option(
+        *names, type=_PATH_TYPES[kind], default=default, show_default=show_default, help=help
+    )
+
+
+JOBS_OPTION = click.option(
+    "--jobs",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: one per CPU; 1 runs in this process).",
+)
+"""``--jobs``: how many worker processes run the replays (one per CPU by default)."""
+
+
 def allow_empty_option() -> Callable[[FC], FC]:
     """``--allow-empty``: a run in which nothing reached the fault manager may hold the budget
     (``check``, ``fleet --budget``, ``sweep --budget``)."""
@@ -80,16 +113,22 @@ def _timeout_seconds(
     return value
 
 
+def stacked(*options: Callable[[FC], FC]) -> Callable[[FC], FC]:
+    """Several options as one decorator, listed in ``--help`` in the order given."""
+
+    def decorate(command: FC) -> FC:
+        for option in reversed(options):
+            command = option(command)
+        return command
+
+    return decorate
+
+
 def executor_options(timeout_help: str) -> Callable[[FC], FC]:
     """``--jobs``, ``--dask`` and ``--timeout``: where a command running many replays runs them
     (``fleet``, ``sweep``); ``timeout_help`` says what one timed-out unit of work is."""
     options = (
-        click.option(
-            "--jobs",
-            type=click.IntRange(min=1),
-            default=None,
-            help="Worker processes (default: one per CPU; 1 runs in this process).",
-        ),
+        JOBS_OPTION,
         click.option(
             "--dask",
             "dask_address",
@@ -107,13 +146,7 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
             help=timeout_help,
         ),
     )
-
-    def decorate(command: FC) -> FC:
-        for option in reversed(options):
-            command = option(command)
-        return command
-
-    return decorate
+    return stacked(*options)
 
 
 STRICT_HELP = (
@@ -125,6 +158,18 @@ STRICT_HELP = (
 def strict_option() -> Callable[[FC], FC]:
     """``--strict``: damage fails the check (``check``; ``fleet``, ``sweep`` with a budget)."""
     return click.option("--strict", is_flag=True, help=STRICT_HELP)
+
+
+@contextlib.contextmanager
+def writing(what: str, path: Path | str | None) -> Iterator[None]:
+    """Writing ``what`` (an output a command writes) to ``path``: an OSError becomes the one
+    line that names the file (exit status 2), never a traceback."""
+    try:
+        yield
+    except OSError as err:
+        raise MedkitReplayError(
+            f"cannot write {what}: {err.strerror or err}", path=str(path)
+        ) from None
 
 
 def say_written(paths: Iterable[Path | str], *, quiet: bool = False) -> None:

@@ -13,7 +13,15 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths, say_written
+from medkit_replay.commands import (
+    config_option,
+    input_argument,
+    local_paths,
+    path_option,
+    say_written,
+    stacked,
+    writing,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
@@ -21,17 +29,8 @@ from medkit_replay.outputs import OUTPUTS, FileOutput
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
-    from click.decorators import FC
-
     from medkit_replay.outputs.json_report import EncodedAhead
     from medkit_replay.result import Result
-
-
-def report_options(command: FC) -> FC:
-    """The options naming the report files ``analyze`` (and ``follow``) write."""
-    for option in reversed(_REPORT_OPTIONS):
-        command = option(command)
-    return command
 
 
 _REPORT_OPTIONS = (
@@ -43,35 +42,29 @@ _REPORT_OPTIONS = (
         metavar="FILE|-",
         help="Write the JSON report here ('-': standard output; FILE.gz or FILE.zst compressed).",
     ),
-    click.option(
-        "--csv",
-        "csv_dir",
-        type=click.Path(path_type=Path),
-        default=None,
-        help="Write every report table as CSV into this directory.",
+    path_option(
+        "--csv", "csv_dir", kind="any", help="Write every report table as CSV into this directory."
     ),
-    click.option(
+    path_option(
         "--parquet",
         "parquet_dir",
-        type=click.Path(path_type=Path),
-        default=None,
+        kind="any",
         help="Write every report table as Parquet into this directory (needs the 'parquet' extra).",
     ),
-    click.option(
+    path_option(
         "--mcap",
         "mcap_out",
-        type=click.Path(path_type=Path, dir_okay=False),
-        default=None,
         help="Write the replayed FaultEvents and status changes as an MCAP recording.",
     ),
-    click.option(
+    path_option(
         "--html",
         "html_out",
-        type=click.Path(path_type=Path, dir_okay=False),
-        default=None,
         help="Write a self-contained HTML report (fault timeline, counter traces, correlation).",
     ),
 )
+
+report_options = stacked(*_REPORT_OPTIONS)
+"""The options naming the report files ``analyze`` (and ``follow``) write."""
 
 
 ALL_OPTION = click.option(
@@ -87,19 +80,16 @@ ALL_OPTION = click.option(
 @input_argument("inputs")
 @config_option()
 @report_options
-@click.option(
+@path_option(
     "--graph",
     "graph_file",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="The robot's node graph (YAML node -> publishers/subscribers, or `ros2 node info` "
     "text): entity-default freeze frames and entity-scoped recordings need it.",
 )
-@click.option(
+@path_option(
     "--evidence",
     "evidence_dir",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=None,
+    kind="folder",
     help="Write each black-box recording (snapshots.rosbag.enabled) here as a rosbag2 folder "
     "(a folder there is replaced only when an earlier run wrote it: .medkit-replay-clip).",
 )
@@ -227,14 +217,10 @@ def write_reports(
 
     def job(output: FileOutput, target: Path, writer: Callable[[Result, Path], object]) -> Job:
         def write() -> None:
-            try:
+            with writing(output.label, target):
                 if output.files is None:  # a file: its folder is made, as --csv makes its own
                     target.parent.mkdir(parents=True, exist_ok=True)
                 writer(result, target)
-            except OSError as err:
-                raise MedkitReplayError(
-                    f"cannot write {output.label}: {err.strerror or err}", path=str(target)
-                ) from None
 
         return output.label, write
 
@@ -254,13 +240,9 @@ def write_reports(
             with standard_output("the report"):
                 write_report_stdout(result, ahead)
         elif json_out is not None:
-            try:
+            with writing("report", json_out):
                 Path(json_out).parent.mkdir(parents=True, exist_ok=True)
                 write_report(result, Path(json_out), ahead)
-            except OSError as err:
-                raise MedkitReplayError(
-                    f"cannot write report: {err.strerror or err}", path=json_out
-                ) from None
     if json_out is None or not chosen:
         for _, write in jobs:
             write()

@@ -20,8 +20,10 @@ from medkit_replay.commands import (
     config_option,
     input_argument,
     local_paths,
+    path_option,
     say_written,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
@@ -49,12 +51,8 @@ SUMMARY_ENV = "GITHUB_STEP_SUMMARY"
     is_flag=True,
     help="Check the inputs as one recording (as analyze does), not each as its own run.",
 )
-@click.option(
-    "--junit",
-    "junit_out",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Write JUnit XML: one testsuite per run, one testcase per rule.",
+@path_option(
+    "--junit", "junit_out", help="Write JUnit XML: one testsuite per run, one testcase per rule."
 )
 @click.option(
     "--github",
@@ -124,12 +122,8 @@ def check(
     with standard_output("the check's results"):
         print_conclusion(runs, sys.stdout)
     if junit_out is not None:
-        try:
+        with writing("JUnit XML", junit_out):
             write_junit(runs, junit_out)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write JUnit XML: {err.strerror}", path=str(junit_out)
-            ) from None
     if github:
         _github(runs)
     if junit_out is not None:

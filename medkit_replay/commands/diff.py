@@ -15,7 +15,13 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths, say_written
+from medkit_replay.commands import (
+    config_option,
+    input_argument,
+    local_paths,
+    say_written,
+    writing,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import MIB, REPORT_COMPRESSIONS, open_regular
@@ -214,12 +220,8 @@ def diff(
         with standard_output("the diff"):
             sys.stdout.write(text)
     elif json_out is not None:
-        try:
+        with writing("diff", json_out):
             write_text_atomic(Path(json_out), text)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write diff: {err.strerror or err}", path=json_out
-            ) from None
     if not quiet:
         if json_out == "-":
             _print(result, sys.stderr, notes)

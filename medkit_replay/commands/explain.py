@@ -8,15 +8,22 @@ from __future__ import annotations
 import math
 import sys
 from contextlib import nullcontext
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument
+from medkit_replay.commands import (
+    config_option,
+    input_argument,
+    path_option,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.text import clip, printable
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 MAX_CODE_SHOWN = 256
 """Characters of a code named in an error (the longest valid code, at 0.7.0)."""
@@ -47,11 +54,9 @@ def _at_offset_ns(at: float | None, option: str = "--at") -> int | None:
     help="Stop the story at this many seconds from the recording's start and show the fault's "
     "state then.",
 )
-@click.option(
+@path_option(
     "--graph",
     "graph_file",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="The robot's node graph, as for 'analyze --graph': the freeze frames and recordings "
     "the story tells that use the faulting node's own topics need it.",
 )

@@ -20,8 +20,10 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    path_option,
     say_damage,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -34,22 +36,17 @@ DEFAULT_OUT = Path("fleet-report")
 @config_option(
     "ROS 2 parameter file for every run (repeatable; later files override earlier ones)."
 )
-@click.option(
-    "--budget",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Fault budget YAML checked on every run (the budget column).",
-)
+@path_option("--budget", help="Fault budget YAML checked on every run (the budget column).")
 @allow_empty_option()
 @executor_options(
     "Kill a run that takes longer and report it as failed (runs in worker processes)."
 )
-@click.option(
+@path_option(
     "--out",
     "out_dir",
-    type=click.Path(path_type=Path, file_okay=False),
     default=DEFAULT_OUT,
     show_default=True,
+    kind="folder",
     help="Folder for runs.csv/.json, codes.csv/.json and index.html.",
 )
 @click.option("--quiet", is_flag=True, help="No summary, no progress bar.")
@@ -141,12 +138,8 @@ def fleet(
                 recordings, configs, budget=parsed_budget, jobs=jobs, timeout=timeout, on_done=bar
             )
     runs, texts = tabulated(runs)
-    try:
+    with writing("the fleet report", out_dir):
         write_texts(texts, out_dir)
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot write the fleet report: {err.strerror}", path=str(out_dir)
-        ) from None
     if not quiet:
         with standard_output("the fleet summary"):
             print_summary(runs, sys.stdout, out_dir, release)

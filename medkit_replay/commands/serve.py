@@ -17,7 +17,12 @@ from typing import TYPE_CHECKING
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths
+from medkit_replay.commands import (
+    config_option,
+    input_argument,
+    local_paths,
+    path_option,
+)
 from medkit_replay.errors import MedkitReplayError
 
 if TYPE_CHECKING:
@@ -36,18 +41,15 @@ def _finite(_ctx: click.Context, param: click.Parameter, value: float | None) ->
 @click.command()
 @input_argument("inputs")
 @config_option()
-@click.option(
+@path_option(
     "--graph",
     "graph_file",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="The robot's node graph: the entities served (otherwise the recording's node names).",
 )
-@click.option(
+@path_option(
     "--evidence",
     "evidence_dir",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=None,
+    kind="folder",
     help="Write the black-box recordings here, as analyze does, and serve them as bulk data "
     "(by default they go to a temporary folder removed when the server stops).",
 )

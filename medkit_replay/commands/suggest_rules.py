@@ -15,7 +15,15 @@ from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from medkit_replay.commands import config_option, input_argument, local_paths, say_written
+from medkit_replay.commands import (
+    JOBS_OPTION,
+    config_option,
+    input_argument,
+    local_paths,
+    path_option,
+    say_written,
+    writing,
+)
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
 from medkit_replay.outputs.console import echo, warn
@@ -69,24 +77,15 @@ MAX_LISTED = 20
     help="Pairs of codes weighed at most; past it, only the codes confirmed in the most runs are "
     "paired (said in a warning).",
 )
-@click.option(
-    "--out",
-    "out_path",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Write the correlation file here (default: standard output).",
+@path_option(
+    "--out", "out_path", help="Write the correlation file here (default: standard output)."
 )
 @click.option(
     "--validate",
     is_flag=True,
     help="Replay the inputs with the proposed rules: events muted, and mutes without a root.",
 )
-@click.option(
-    "--jobs",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Worker processes (default: one per CPU; 1 runs in this process).",
-)
+@JOBS_OPTION
 def suggest_rules(
     inputs: tuple[Path | str, ...],
     configs: tuple[Path, ...],
@@ -150,12 +149,8 @@ def suggest_rules(
     text = rules_yaml(suggestion)
     report = sys.stdout if out_path is not None else sys.stderr
     if out_path is not None:
-        try:
+        with writing("the rules", out_path):
             write_text_atomic(out_path, text)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write the rules: {err.strerror}", path=str(out_path)
-            ) from None
         say_written([out_path])
     else:
         with standard_output("the rules"):

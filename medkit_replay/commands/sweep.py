@@ -19,9 +19,11 @@ from medkit_replay.commands import (
     executor_options,
     input_argument,
     local_paths,
+    path_option,
     say_damage,
     say_written,
     strict_option,
+    writing,
 )
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import InputError, MedkitReplayError
@@ -39,27 +41,21 @@ from medkit_replay.outputs.console import warn
     metavar="NODE.PARAM=V1,V2,...",
     help="A parameter and its values (repeatable: the grid is every combination).",
 )
-@click.option(
-    "--budget",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    help="Fault budget YAML checked on every variant x input (the budget columns).",
+@path_option(
+    "--budget", help="Fault budget YAML checked on every variant x input (the budget columns)."
 )
 @allow_empty_option()
 @executor_options("Kill a job (one input, a share of the grid) that takes longer; its rows say so.")
-@click.option(
+@path_option(
     "--out",
     "out_dir",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=None,
+    kind="folder",
     help="Folder for the tables (runs, run_codes, variants, codes; CSV and Parquet) and a "
     "parameter file per variant (variants/v01.yaml...).",
 )
-@click.option(
+@path_option(
     "--html",
     "html_path",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
     help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
 )
 @click.option(
@@ -167,32 +163,23 @@ def sweep(
     workers = 1 if dask_address is None and jobs == 1 else (jobs or default_jobs())
     plan = plan_jobs(recordings, configs, grid.variants, parsed_budget, workers)
     bar = fleet_progress(sys.stderr, len(plan), quiet=quiet)
-    try:
-        with bar if bar is not None else nullcontext():
-            outcome = run_sweep(
-                plan,
-                grid,
-                out_dir,
-                jobs=workers,
-                dask_address=dask_address,
-                timeout=timeout,
-                parquet=parquet,
-                on_done=bar,
-            )
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot write the sweep tables: {err.strerror}", path=str(out_dir)
-        ) from None
+    with writing("the sweep tables", out_dir), bar if bar is not None else nullcontext():
+        outcome = run_sweep(
+            plan,
+            grid,
+            out_dir,
+            jobs=workers,
+            dask_address=dask_address,
+            timeout=timeout,
+            parquet=parquet,
+            on_done=bar,
+        )
     if html_path is not None:
         from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
 
-        try:
+        with writing("the page", html_path):
             html_path.parent.mkdir(parents=True, exist_ok=True)
             write_page(html_path, grid, outcome, len(recordings))
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot write the page: {err.strerror}", path=str(html_path)
-            ) from None
     if not quiet:
         with standard_output("the sweep summary"):
             parts = summary_renderables(

@@ -90,28 +90,25 @@ def action_status_bridge_config(
     read = ParameterReader(ACTION_NODE, params)
     severity = _integer(read, release, "aborted_severity", 2)
     if not 0 <= severity <= 3:
-        read.warn(
+        severity = read.replaced(
+            "aborted_severity",
             f"aborted_severity {severity} out of range [0,3]; clamping to ERROR",
-            parameter="aborted_severity",
+            2,
         )
-        severity = 2
     canceled_is_fault = read.boolean("canceled_is_fault", False)
     heal_on_succeeded = read.boolean("heal_on_succeeded", True)
     rescan = read.double("rescan_period_sec", 2.0)
     if rescan <= 0.0:
-        read.warn(
-            f"rescan_period_sec {rescan:.3f} not positive; using 2.0", parameter="rescan_period_sec"
+        rescan = read.replaced(
+            "rescan_period_sec", f"rescan_period_sec {rescan:.3f} not positive; using 2.0", 2.0
         )
-        rescan = 2.0
     retry = 0.05  # without the retry timer (0.6.0) the default stands, for the record
     if release.action_bridge_defers_delivery:
         retry = read.double("retry_period_sec", 0.05)
         if retry <= 0.0:
-            read.warn(
-                f"retry_period_sec {retry:.3f} not positive; using 0.05",
-                parameter="retry_period_sec",
+            retry = read.replaced(
+                "retry_period_sec", f"retry_period_sec {retry:.3f} not positive; using 0.05", 0.05
             )
-            retry = 0.05
     prefix = action_code_prefix(read.string("code_prefix", "ACTION"))
     if not prefix:
         read.warn("code_prefix empty after normalization; using ACTION", parameter="code_prefix")
@@ -155,11 +152,11 @@ def log_bridge_config(
     topic = read.string("rosout_topic", "/rosout")
     floor = _integer(read, release, "severity_floor", LEVEL_WARN)
     if not 0 <= floor <= LEVEL_FATAL:
-        read.warn(
+        floor = read.replaced(
+            "severity_floor",
             f"severity_floor={floor} out of range [0,{LEVEL_FATAL}], clamping",
-            parameter="severity_floor",
+            min(max(floor, 0), LEVEL_FATAL),
         )
-        floor = min(max(floor, 0), LEVEL_FATAL)
     prefix = log_code_prefix(read.string("code_prefix", "LOG"))
     exclude = read.strings("exclude_nodes")
     include_only = read.strings("include_only_nodes")

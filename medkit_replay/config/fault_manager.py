@@ -89,35 +89,33 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
     sanitized = release.sanitize_thresholds
     conf = reader.integer("confirmation_threshold", -1)
     if conf > 0:
-        reader.warn(
+        conf = reader.replaced(
+            "confirmation_threshold",
             f"confirmation_threshold {conf} is positive; using {-conf} (upstream negates it)",
-            parameter="confirmation_threshold",
+            -conf,
         )
-        conf = -conf
     in_int32 = to_int32(conf) == conf
     conf = _int32(reader, "confirmation_threshold", conf, -1, sanitized=sanitized)
     heal = reader.integer("healing_threshold", 3)
     if heal < 0:
-        reader.warn(
+        heal = reader.replaced(
+            "healing_threshold",
             f"healing_threshold {heal} is negative; using {-heal} (upstream negates it)",
-            parameter="healing_threshold",
+            -heal,
         )
-        heal = -heal
     heal = _int32(reader, "healing_threshold", heal, 3, sanitized=sanitized)
     auto_sec = reader.double("auto_confirm_after_sec", 0.0)
     if auto_sec < 0:
-        reader.warn(
+        auto_sec = reader.replaced(
+            "auto_confirm_after_sec",
             f"auto_confirm_after_sec {auto_sec} is negative; using 0.0",
-            parameter="auto_confirm_after_sec",
+            0.0,
         )
-        auto_sec = 0.0
     elif math.isnan(auto_sec):
         # Upstream keeps NaN, and its timer starts only when the value is > 0: never.
-        reader.warn(
-            "auto_confirm_after_sec nan is not a number; using 0.0",
-            parameter="auto_confirm_after_sec",
+        auto_sec = reader.replaced(
+            "auto_confirm_after_sec", "auto_confirm_after_sec nan is not a number; using 0.0", 0.0
         )
-        auto_sec = 0.0
     elif auto_sec * NS_PER_SEC > INT64_MAX:
         # Upstream turns the seconds into an int64-nanosecond duration: inf or a value past
         # ~292 years is undefined there. Nothing that old exists in a recording (whose times
@@ -139,11 +137,11 @@ def _build(params: NodeParams, release: Release) -> tuple[FaultManagerConfig, li
         else DEFAULT_NEAR_MISS_BOUND
     )
     if near_miss < 0:
-        reader.warn(
+        near_miss = reader.replaced(
+            "near_miss.max_per_fault",
             f"near_miss.max_per_fault {near_miss} is negative; using {DEFAULT_NEAR_MISS_BOUND}",
-            parameter="near_miss.max_per_fault",
+            DEFAULT_NEAR_MISS_BOUND,
         )
-        near_miss = DEFAULT_NEAR_MISS_BOUND
     storage_type = _storage_type(reader)  # upstream creates its storage here
     debounce = DebounceConfig(
         confirmation_threshold=conf,

@@ -6,7 +6,7 @@ A value of another type stops the live node at start-up, so it raises ConfigErro
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from medkit_replay.engine.local_filter import LocalFilterConfig
 from medkit_replay.errors import ConfigError, ConfigWarning
@@ -21,6 +21,8 @@ INT32_MAX = (1 << 31) - 1
 
 _FILTER = "fault_reporter.local_filtering."
 _SHOWN = 80
+
+_T = TypeVar("_T")
 
 
 def _kind(value: object) -> str:
@@ -68,6 +70,12 @@ class ParameterReader:
         self.warnings.append(
             ConfigWarning(f"{self.node}: {text}", shown_at=shown_at, parameter=parameter)
         )
+
+    def replaced(self, parameter: str, text: str, value: _T) -> _T:
+        """``value``, used in place of ``parameter``'s own that the live node would not use; the
+        warning it logs (``text``) recorded as :meth:`warn` does."""
+        self.warn(text, parameter=parameter)
+        return value
 
     def _wrong(self, name: str, expected: str, value: object, hint: str = "") -> ConfigError:
         problem = (

@@ -49,32 +49,30 @@ def _build(params: NodeParams, release: Release) -> tuple[SnapshotConfig, list[s
     reader = ParameterReader("fault_manager", values(params))
     cooldown = reader.double(_P + "recapture_cooldown_sec", 60.0)
     if cooldown < 0 or math.isnan(cooldown):
-        reader.warn(
+        cooldown = reader.replaced(
+            _P + "recapture_cooldown_sec",
             f"snapshots.recapture_cooldown_sec {cooldown} should be >= 0; disabling it",
-            parameter=_P + "recapture_cooldown_sec",
+            0.0,
         )
-        cooldown = 0.0
     max_per_fault = reader.integer(_P + "max_per_fault", 10)
     if max_per_fault < 0:
-        reader.warn(
+        max_per_fault = reader.replaced(
+            _P + "max_per_fault",
             f"snapshots.max_per_fault {max_per_fault} should be >= 0; no limit",
-            parameter=_P + "max_per_fault",
+            0,
         )
-        max_per_fault = 0
     timeout = reader.double(_P + "timeout_sec", 1.0)
     if not timeout > 0:
-        reader.warn(
-            f"snapshots.timeout_sec {timeout} must be positive; using 1.0",
-            parameter=_P + "timeout_sec",
+        timeout = reader.replaced(
+            _P + "timeout_sec", f"snapshots.timeout_sec {timeout} must be positive; using 1.0", 1.0
         )
-        timeout = 1.0
     max_size = reader.integer(_P + "max_message_size", 65536)
     if max_size <= 0:
-        reader.warn(
+        max_size = reader.replaced(
+            _P + "max_message_size",
             f"snapshots.max_message_size {max_size} must be positive; using 65536",
-            parameter=_P + "max_message_size",
+            65536,
         )
-        max_size = 65536
     defaults = reader.strings(_P + "default_topics")
     if release.entity_default_snapshots:  # '' is "no defaults" since entity_default came
         defaults = tuple(t for t in defaults if t)
@@ -131,39 +129,39 @@ def _rosbag(reader: ParameterReader, release: Release) -> RosbagConfig:
         return switches  # upstream declares the rest only when enabled
     before = reader.double(_R + "duration_sec", 5.0)
     if not before > 0:
-        reader.warn(
+        before = reader.replaced(
+            _R + "duration_sec",
             f"snapshots.rosbag.duration_sec {before} must be positive; using 5.0",
-            parameter=_R + "duration_sec",
+            5.0,
         )
-        before = 5.0
     after = reader.double(_R + "duration_after_sec", 1.0)
     if after < 0:
-        reader.warn(
+        after = reader.replaced(
+            _R + "duration_after_sec",
             f"snapshots.rosbag.duration_after_sec {after} must be >= 0; using 0.0",
-            parameter=_R + "duration_after_sec",
+            0.0,
         )
-        after = 0.0
     fmt = reader.string(_R + "format", release.default_bag_format)
     if fmt not in ("mcap", "sqlite3"):
-        reader.warn(
+        fmt = reader.replaced(
+            _R + "format",
             f"snapshots.rosbag.format {fmt!r} is unknown; using sqlite3 as upstream does",
-            parameter=_R + "format",
+            "sqlite3",
         )
-        fmt = "sqlite3"
     size = reader.integer(_R + "max_bag_size_mb", 50)
     if size <= 0:
-        reader.warn(
+        size = reader.replaced(
+            _R + "max_bag_size_mb",
             "snapshots.rosbag.max_bag_size_mb must be positive; using 50",
-            parameter=_R + "max_bag_size_mb",
+            50,
         )
-        size = 50
     per_fault = reader.integer(_R + "max_bags_per_fault", 1) if release.bag_history else 1
     if per_fault < 0:
-        reader.warn(
+        per_fault = reader.replaced(
+            _R + "max_bags_per_fault",
             "snapshots.rosbag.max_bags_per_fault must be >= 0; no limit",
-            parameter=_R + "max_bags_per_fault",
+            0,
         )
-        per_fault = 0
     return replace(
         switches,
         enabled=True,

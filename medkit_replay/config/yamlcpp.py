@@ -262,21 +262,19 @@ def _stream_integer(text: str, *, signed: bool) -> int | None:
 
 def as_uint32(node: Node) -> int:
     """`as<uint32_t>()`: decimal, `0x` hex or `0` octal, optional `+`; no `-`, no overflow."""
-    if is_scalar(node):
-        text = cast("str", node.value)
-        value = _stream_integer(text, signed=False)
-        if value is not None:
-            return value
-        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not a uint32", line_of(node))
-    raise YamlCppError(f"bad conversion: a {kind_name(node)} is not a uint32", line_of(node))
+    return _as_integer(node, signed=False, name="a uint32")
 
 
 def as_int32(node: Node) -> int:
     """`as<int>()`: decimal, `0x` hex or `0` octal with an optional sign, within int32."""
+    return _as_integer(node, signed=True, name="an int")
+
+
+def _as_integer(node: Node, *, signed: bool, name: str) -> int:
     if is_scalar(node):
         text = cast("str", node.value)
-        value = _stream_integer(text, signed=True)
+        value = _stream_integer(text, signed=signed)
         if value is not None:
             return value
-        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not an int", line_of(node))
-    raise YamlCppError(f"bad conversion: a {kind_name(node)} is not an int", line_of(node))
+        raise YamlCppError(f"bad conversion: '{shown_text(text)}' is not {name}", line_of(node))
+    raise YamlCppError(f"bad conversion: a {kind_name(node)} is not {name}", line_of(node))

@@ -6,7 +6,7 @@ Pure: two report dicts in, a :class:`ReportDiff` out; no file, no clock, no term
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, get_args
 
@@ -343,15 +343,7 @@ def _fault_differences(code: str, old: _Report, new: _Report, tolerance: int) ->
         return [Difference("fault_added", code, {"current": dict(after)})]
     found: list[Difference] = []
     if before is not None and after is not None:
-        found += [
-            Difference(
-                "fault_changed",
-                code,
-                {"field": name, "baseline": before.get(name), "current": after.get(name)},
-            )
-            for name in FAULT_FIELDS
-            if before.get(name) != after.get(name)
-        ]
+        found += _changed_fields("fault_changed", code, before, after, FAULT_FIELDS)
     found += _item_differences(
         code,
         "transition",
@@ -410,12 +402,21 @@ def _cluster_differences(cluster_id: str, old: _Report, new: _Report) -> list[Di
         return [Difference("cluster_removed", cluster_id, {"baseline": dict(before or {})})]
     if before is None:
         return [Difference("cluster_added", cluster_id, {"current": dict(after)})]
+    return _changed_fields("cluster_changed", cluster_id, before, after, CLUSTER_FIELDS)
+
+
+def _changed_fields(
+    kind: Kind,
+    key: str,
+    before: Mapping[str, object],
+    after: Mapping[str, object],
+    names: Iterable[str],
+) -> list[Difference]:
+    """One ``kind`` difference per field of ``names`` whose value changed."""
     return [
         Difference(
-            "cluster_changed",
-            cluster_id,
-            {"field": name, "baseline": before.get(name), "current": after.get(name)},
+            kind, key, {"field": name, "baseline": before.get(name), "current": after.get(name)}
         )
-        for name in CLUSTER_FIELDS
+        for name in names
         if before.get(name) != after.get(name)
     ]

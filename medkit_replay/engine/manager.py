@@ -41,7 +41,8 @@ if TYPE_CHECKING:
 
     from medkit_replay.engine.correlation.engine import CorrelationResult
     from medkit_replay.engine.correlation.rules import CorrelationConfig
-    from medkit_replay.model import Origin, RecordLog, RecordRows
+    from medkit_replay.model import Origin, RecordLog, ReportFields
+    from medkit_replay.rows import RecordRows
 
 _T = TypeVar("_T")
 _EVENT_NAMES = {event.value: event.name for event in EventType}
@@ -49,7 +50,8 @@ _MAX_CACHED_SOURCES = 65536
 
 Row = tuple[object, ...]
 if TYPE_CHECKING:
-    FieldsReporter: TypeAlias = Callable[[int, Origin, str | None, str, int, int, str, str], bool]
+    FieldsReporter: TypeAlias = Callable[[*ReportFields], bool]
+    """A ReportSink that answers ``accepted`` (the manager's :attr:`FaultManager.report_fields`)."""
     CorrelationWatcher: TypeAlias = Callable[[int, str, CorrelationResult], None]
 
 
@@ -127,16 +129,7 @@ class FaultManager:
 
         An adapter over :attr:`report_fields`, the one implementation.
         """
-        return self.report_fields(
-            request.t_ns,
-            request.origin,
-            request.topic,
-            request.fault_code,
-            request.event_type,
-            request.severity,
-            request.description,
-            request.source_id,
-        )
+        return self.report_fields(*request.as_fields())
 
     def set_row_sinks(
         self,
@@ -178,6 +171,7 @@ class FaultManager:
             description: str,
             source_id: str,
         ) -> bool:
+            # The ReportFields named, not *request: this runs per status (no tuple per call).
             if fault_code in valid_codes:  # only the checks that do not depend on the code
                 valid = source_id and (event_type == 1 or (event_type == 0 and severity <= 3))
                 reason = (

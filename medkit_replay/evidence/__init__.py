@@ -20,14 +20,10 @@ from medkit_replay.evidence.rules import RosbagConfig, SnapshotConfig
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.evidence.plan import Plan
     from medkit_replay.evidence.source import EvidenceSource
-    from medkit_replay.model import (
-        EvidenceRecording,
-        ReportRecord,
-        SnapshotCapture,
-        Transition,
-    )
+    from medkit_replay.model import ReportRecord, Transition
 
 __all__ = [
     "Evidence",
@@ -90,18 +86,6 @@ def collect_evidence(
     )
     if not config.captures:
         return Evidence(notes=unused)
-    found = _collect(config, options, inputs, transitions, reports, recorded_topics)
-    return dataclasses.replace(found, notes=(*found.notes, *unused)) if unused else found
-
-
-def _collect(
-    config: SnapshotConfig,
-    options: EvidenceOptions,
-    inputs: Iterable[Path | str],
-    transitions: Iterable[Transition],
-    reports: Iterable[ReportRecord],
-    recorded_topics: Iterable[str],
-) -> Evidence:
     source: EvidenceSource | None = None
 
     def opened() -> EvidenceSource:
@@ -118,12 +102,14 @@ def _collect(
 
     try:
         plan = plan_evidence(config, transitions, reports, recorded_topics, options.graph, probe)
-        if not plan.captures and not plan.recordings:
-            return Evidence(notes=tuple(plan.notes))
-        return _gather(plan, config, options, opened())
+        if plan.captures or plan.recordings:
+            found = _gather(plan, config, options, opened())
+        else:
+            found = Evidence(notes=tuple(plan.notes))
     finally:
         if source is not None:
             source.close()
+    return dataclasses.replace(found, notes=(*found.notes, *unused)) if unused else found
 
 
 def _gather(

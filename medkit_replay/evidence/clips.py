@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import yaml
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
+from medkit_replay.captures import EvidenceRecording, RecordingTopic
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.evidence.folder import (
     MARKER,
@@ -26,7 +27,6 @@ from medkit_replay.evidence.folder import (
     is_ours,
 )
 from medkit_replay.inputs.typestore import message_store
-from medkit_replay.model import EvidenceRecording, RecordingTopic
 
 if TYPE_CHECKING:
     from collections.abc import Iterator

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from medkit_replay.captures import SnapshotCapture, SnapshotTopic
 from medkit_replay.evidence.render import render
 from medkit_replay.evidence.rules import evict_capture_sets
 from medkit_replay.inputs.typestore import message_store
-from medkit_replay.model import NS_PER_SEC, SnapshotCapture, SnapshotTopic
+from medkit_replay.model import NS_PER_SEC
 
 if TYPE_CHECKING:
     from medkit_replay.evidence.plan import Plan, PlannedCapture

@@ -12,8 +12,8 @@ from medkit_replay.explaining.entries import when
 from medkit_replay.explaining.lines import Entry, Line, part
 
 if TYPE_CHECKING:
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.explaining.lines import JSON
-    from medkit_replay.model import EvidenceRecording, SnapshotCapture
     from medkit_replay.result import Result
 
 MAX_VALUE_TEXT = 200

@@ -196,12 +196,8 @@ def run_one(
             verdict = "fail" if failures else "pass"
             summary = replace(summary, budget=verdict, budget_failures=failures)
         problem = summary_problem(summary)
-    except MedkitReplayError as err:
-        error = err.render()
-    except FileRefusedError as err:
-        error = f"{path}: {err}"
     except Exception as err:  # one recording must not end the fleet
-        error = f"{path}: {describe_error(err)}"
+        error = run_error(path, err)
     else:
         if problem is None:
             return summary
@@ -212,6 +208,16 @@ def run_one(
     if len(error) > MAX_ERROR_CHARS:
         error = error[: MAX_ERROR_CHARS - 1] + "…"
     return RunSummary(path=shown, kind=kind, error=error)
+
+
+def run_error(path: Path | str, error: Exception) -> str:
+    """Why one run (a fleet's recording, a sweep's input) failed: an input or config problem as
+    the tool words it, a refused file or any other exception after the input's name."""
+    if isinstance(error, MedkitReplayError):
+        return error.render()
+    if isinstance(error, FileRefusedError):
+        return f"{path}: {error}"
+    return f"{path}: {describe_error(error)}"
 
 
 def describe_error(error: BaseException) -> str:

@@ -23,6 +23,7 @@ from medkit_replay.gateway.bulk_json import (
     rosbag_descriptors_body,
     rosbag_download,
 )
+from medkit_replay.gateway.detail_json import fault_detail_body, recordings_held_at
 from medkit_replay.gateway.errors import (
     ERR_INTERNAL_ERROR,
     ERR_INVALID_REQUEST,
@@ -38,11 +39,9 @@ from medkit_replay.gateway.errors import (
 )
 from medkit_replay.gateway.faults_json import (
     entity_fault_list_body,
-    fault_detail_body,
     fault_list_body,
     parse_status_filter,
     query_bool,
-    recordings_held_at,
     scoped_fault,
 )
 from medkit_replay.gateway.stream import EventStream

@@ -12,20 +12,15 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from medkit_replay.engine.validation import fault_code_error
+from medkit_replay.gateway.detail_json import bag_size, duration_sec, ordered_recordings
 from medkit_replay.gateway.errors import bulk_data_not_found, bulk_data_not_in_scope
-from medkit_replay.gateway.faults_json import (
-    JsonObject,
-    bag_size,
-    duration_sec,
-    in_scope,
-    iso8601,
-    ordered_recordings,
-)
+from medkit_replay.gateway.faults_json import JsonObject, in_scope, iso8601
 
 if TYPE_CHECKING:
     from collections.abc import Collection, Mapping, Sequence
 
-    from medkit_replay.model import EvidenceRecording, FaultSnapshot
+    from medkit_replay.captures import EvidenceRecording
+    from medkit_replay.model import FaultSnapshot
 
 _MIMETYPES = {"mcap": "application/x-mcap", "sqlite3": "application/x-sqlite3"}
 _RECORDING_ID_EXTRA = 32  # a recording id may be this much longer than a fault code

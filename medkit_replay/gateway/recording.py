@@ -14,10 +14,10 @@ from medkit_replay.gateway.entities import discover
 from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
+    from medkit_replay.captures import SnapshotCapture
     from medkit_replay.evidence.graph import NodeGraph
     from medkit_replay.gateway.entities import Entities
     from medkit_replay.history import FaultHistory
-    from medkit_replay.model import SnapshotCapture
     from medkit_replay.result import Result
 
 NS_PER_SEC = 1_000_000_000
@@ -108,14 +108,9 @@ def served_recording(
     that logged on /rosout (when the log bridge reads it); a clip is
     served from the storage file inside the folder the replay wrote for it.
     """
-    starts = [s.start_ns for s in result.inputs if s.start_ns is not None]
-    ends = [s.end_ns for s in result.inputs if s.end_ns is not None]
-    if result.summary.start_ns is not None:
-        starts.append(result.summary.start_ns)
-    if result.summary.end_ns is not None:
-        ends.append(result.summary.end_ns)
-    origin = min(starts, default=0)
-    end = max(ends, default=origin)
+    first, last = result.span()
+    origin = first if first is not None else 0
+    end = last if last is not None else origin
     names: set[str] = set(graph.publishes) | set(graph.subscribes) if graph is not None else set()
     names.update(history.sources)
     clips: dict[str, Path] = {}

@@ -30,17 +30,24 @@ def usable_width(detected: int) -> int:
 
 
 def literal_console(
-    stream: TextIO, *, width: int | None = None, force_terminal: bool | None = None
+    stream: TextIO,
+    *,
+    width: int | None = None,
+    force_terminal: bool | None = None,
+    colour: bool = True,
 ) -> Console:
     """A console with no markup, emoji or highlighting of plain strings, so that recorded text
     prints as it is; terminal, colour and width detected unless given (a detected width that is
-    not usable becomes one that is: see :func:`usable_width`)."""
+    not usable becomes one that is: see :func:`usable_width`); no colour at all without
+    ``colour``."""
     from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn
 
     console = Console(
         file=stream,
         width=width,
         force_terminal=force_terminal,
+        color_system="auto" if colour else None,
+        no_color=None if colour else True,
         markup=False,
         emoji=False,
         highlight=False,
@@ -76,19 +83,8 @@ def progress_bar(stream: TextIO, *, quiet: bool = False) -> ProgressBar | None:
 
 def plain_text(renderable: RenderableType, width: int, *, crop: bool = True) -> str:
     """``renderable`` as plain text (no ANSI codes) laid out for ``width`` columns."""
-    from rich.console import Console  # noqa: PLC0415  # rich only when something is drawn
-
     buffer = io.StringIO()
-    console = Console(
-        file=buffer,
-        width=width,
-        force_terminal=False,
-        color_system=None,
-        no_color=True,
-        markup=False,
-        emoji=False,
-        highlight=False,
-    )
+    console = literal_console(buffer, width=width, force_terminal=False, colour=False)
     console.print(renderable, crop=crop)
     return strip_trailing(buffer.getvalue())
 

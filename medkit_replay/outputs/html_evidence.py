@@ -13,7 +13,7 @@ from medkit_replay.outputs.html_tables import esc, short, when
 from medkit_replay.text import clip
 
 if TYPE_CHECKING:
-    from medkit_replay.model import EvidenceRecording, SnapshotCapture
+    from medkit_replay.captures import EvidenceRecording, SnapshotCapture
     from medkit_replay.outputs.html_timeline import Span
     from medkit_replay.result import Result
 

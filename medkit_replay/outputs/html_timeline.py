@@ -19,8 +19,9 @@ from medkit_replay.text import clip, seconds, severity_name, xml_text
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from medkit_replay.model import FaultSnapshot, NearMiss, RecordRows
+    from medkit_replay.model import FaultSnapshot, NearMiss
     from medkit_replay.result import Result
+    from medkit_replay.rows import RecordRows
 
 ROW_CAP = 1000  # timeline rows; beyond it the most serious faults are kept
 BAND_CAP = 200  # status periods per fault drawn exactly; beyond it, BAND_BINS time bins

@@ -23,7 +23,6 @@ from medkit_replay.outputs.json_report import SPOOLED_LISTS, encode_batch
 from medkit_replay.outputs.json_rows import ROW_SEPARATOR
 
 if TYPE_CHECKING:
-    from types import TracebackType
     from typing import Self
 
     from medkit_replay.spool import Spool
@@ -219,12 +218,7 @@ class JsonAhead:
     def __enter__(self) -> Self:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc_info: object) -> None:
         self.close()
 
 

@@ -11,6 +11,7 @@ from dataclasses import fields, is_dataclass
 from operator import attrgetter
 from typing import IO, TYPE_CHECKING, Any, Protocol, cast, get_args, get_origin, get_type_hints
 
+from medkit_replay.captures import EvidenceRecording, SnapshotCapture
 from medkit_replay.model import (
     CLEAR_ROWS,
     EVENT_ROWS,
@@ -18,19 +19,17 @@ from medkit_replay.model import (
     TRANSITION_ROWS,
     ClearRecord,
     Cluster,
-    EvidenceRecording,
     FaultEvent,
     FaultSnapshot,
     InputSummary,
     MutedFault,
     NearMiss,
-    RecordRows,
     ReportRecord,
-    SnapshotCapture,
     Transition,
 )
 from medkit_replay.outputs.json_rows import ROW_SEPARATOR, Chunk, RecordLines, Row
 from medkit_replay.result import REPORT_SCHEMA
+from medkit_replay.rows import RecordRows
 from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:

@@ -91,7 +91,7 @@ def _struct(cls: type[Any]) -> type[msgspec.Struct]:
 
 def _row_builder(cls: type[Any], names: Sequence[str]) -> Callable[[list[Row]], list[object]]:
     """Rows (a record's fields in order, one nested record's fields spliced in where it stands,
-    as ``model.RecordRows`` lays them out) to structs msgspec encodes."""
+    as ``rows.RecordRows`` lays them out) to structs msgspec encodes."""
     struct = _struct(cls)
     hints = get_type_hints(cls)
     own = [f.name for f in fields(cls)]

@@ -23,7 +23,6 @@ from rich.progress import (
 from rich.text import Text
 
 if TYPE_CHECKING:
-    from types import TracebackType
     from typing import Self
 
     from rich.progress import Task
@@ -70,7 +69,33 @@ class _TimeColumn(ProgressColumn):
         return Text.assemble(("ETA ", "progress.remaining"), eta)
 
 
-class ProgressBar:
+class TransientBar:
+    """A rich progress display on ``stream`` that is gone once it stops; a context manager.
+
+    The one setup of the replay's bar and a fleet's or sweep's bar: ``columns`` say what it
+    shows (``markup``: whether rich markup in the stream's text is read).
+    """
+
+    def __init__(self, stream: TextIO, *columns: ProgressColumn, markup: bool = True) -> None:
+        console = Console(file=stream, highlight=False, emoji=False, markup=markup)
+        self._progress = Progress(
+            *columns,
+            console=console,
+            transient=True,
+            redirect_stdout=False,
+            redirect_stderr=False,
+            refresh_per_second=8,
+        )
+
+    def __enter__(self) -> Self:
+        self._progress.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._progress.stop()
+
+
+class ProgressBar(TransientBar):
     """A callable for ``replay(progress=...)`` drawing one bar per pass; a context manager.
 
     The bar advances with bag time when the recording declares its span up front (indexed
@@ -78,33 +103,16 @@ class ProgressBar:
     """
 
     def __init__(self, stream: TextIO) -> None:
-        console = Console(file=stream, highlight=False, emoji=False)
-        self._progress = Progress(
+        super().__init__(
+            stream,
             TextColumn("{task.description}"),
             BarColumn(bar_width=24),
             TaskProgressColumn(),
             _BagTimeColumn(),
             _MessagesColumn(),
             _TimeColumn(),
-            console=console,
-            transient=True,
-            redirect_stdout=False,
-            redirect_stderr=False,
-            refresh_per_second=8,
         )
         self._passes: dict[Phase, _Pass] = {}
-
-    def __enter__(self) -> Self:
-        self._progress.start()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self._progress.stop()
 
     def __call__(self, update: ReplayProgress) -> None:
         """Show one report of the replay's progress."""

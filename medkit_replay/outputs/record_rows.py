@@ -1,4 +1,4 @@
-"""A Result's long record lists as batches of rows (``model.RecordRows``): a spool hands over the
+"""A Result's long record lists as batches of rows (``rows.RecordRows``): a spool hands over the
 rows it stores, a list's records are taken apart; no record is rebuilt just to be read."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from medkit_replay.spool import Spool
 if TYPE_CHECKING:
     from collections.abc import Iterator, Sequence
 
-    from medkit_replay.model import RecordRows
+    from medkit_replay.rows import RecordRows
 
 Row = tuple[Any, ...]
-"""A record's fields in order (see ``model.RecordRows``), read by position."""
+"""A record's fields in order (see ``rows.RecordRows``), read by position."""
 R = TypeVar("R")
 BATCH = 4096
 

@@ -45,11 +45,10 @@ from medkit_replay.spool import Row, SpillListener, Spool
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
 
-    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.history import FaultHistory
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.inputs.remote.store import Tally
-    from medkit_replay.model import InputSummary, Loss
+    from medkit_replay.model import InputSummary, Loss, ReportSink
     from medkit_replay.pipeline.loop import Clock
     from medkit_replay.pipeline.routing import Handler
     from medkit_replay.pipeline.tracing import Tracer

@@ -13,11 +13,10 @@ from medkit_replay.history import CorrelationState
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.bridges.log import LogBridge
     from medkit_replay.engine.manager import FaultManager, Row
     from medkit_replay.history import FaultHistory
-    from medkit_replay.model import ClearRequest
+    from medkit_replay.model import ClearRequest, ReportSink
     from medkit_replay.pipeline.routing import Handler
 
 

@@ -34,14 +34,13 @@ from medkit_replay.trace import (
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
-    from medkit_replay.bridges.base import ReportSink
     from medkit_replay.engine.correlation.engine import CorrelationResult
     from medkit_replay.engine.correlation.rules import CorrelationRule
     from medkit_replay.engine.manager import Row
     from medkit_replay.engine.timeline import Timeline
     from medkit_replay.inputs import Recording
     from medkit_replay.inputs.selection import Role
-    from medkit_replay.model import FaultSnapshot, Origin
+    from medkit_replay.model import FaultSnapshot, Origin, ReportFields, ReportSink
     from medkit_replay.pipeline.routing import Gate, Request, Router
     from medkit_replay.trace import FaultTrace
 
@@ -76,7 +75,7 @@ class Tracer:
         self._current: MessageTuple | None = None
         self._seen: dict[str, int] = {}  # requests for the code per source in this message
         self._pending: RecordedMessage | None = None  # behind the request in flight
-        self._call: tuple[int, Origin, str | None, int, int, str, str] | None = None
+        self._call: ReportFields | None = None
         correlation = manager.config.correlation
         self._rules = {r.id: rule_facts(r) for r in correlation.rules} if correlation else {}
         report, event, transition = manager.report_row, manager.event_row, manager.transition_row
@@ -128,10 +127,7 @@ class Tracer:
         def apply(request: Request) -> None:
             code = self.code
             if isinstance(request, ReportRequest) and request.fault_code == code:
-                self.requested(
-                    request.t_ns, request.origin, request.topic, request.event_type,
-                    request.severity, request.description, request.source_id,
-                )  # fmt: skip
+                self.requested(*request.as_fields())
             mark, clears = len(self.trace.items), self.manager.output.clears
             before = len(clears)
             inner(request)
@@ -143,18 +139,10 @@ class Tracer:
 
         return apply
 
-    def requested(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-    ) -> None:
+    def requested(self, *request: *ReportFields) -> None:
         """A request for the traced code is on its way: note it and the message behind it."""
-        self._call = (t_ns, origin, topic, event_type, severity, description, source_id)
+        self._call = request
+        _, origin, *_, source_id = request
         nth = self._seen.get(source_id, 0)
         self._seen[source_id] = nth + 1
         self._pending = self._message(origin, source_id, nth)
@@ -186,7 +174,7 @@ class Tracer:
         call = self._call
         if call is None:
             return
-        t_ns, origin, topic, event_type, severity, description, source_id = call
+        t_ns, origin, topic, _, event_type, severity, description, source_id = call
         self.trace.add(
             HeldRequest(
                 t_ns=t_ns,
@@ -309,40 +297,17 @@ class _TracingSink:
         self._tracer = tracer
         self._inner = inner
 
-    def __call__(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        fault_code: str,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-        /,
-    ) -> None:
+    def __call__(self, *request: *ReportFields) -> None:
         tracer = self._tracer
-        if fault_code == tracer.code:
-            tracer.requested(t_ns, origin, topic, event_type, severity, description, source_id)
-        self._inner(t_ns, origin, topic, fault_code, event_type, severity, description, source_id)
+        if request[3] == tracer.code:  # its fault_code
+            tracer.requested(*request)
+        self._inner(*request)
         tracer.settled()
 
-    def withheld(
-        self,
-        t_ns: int,
-        origin: Origin,
-        topic: str | None,
-        fault_code: str,
-        event_type: int,
-        severity: int,
-        description: str,
-        source_id: str,
-        stage: str,
-        reason: str,
-        /,
-    ) -> None:
+    def withheld(self, stage: str, reason: str, *request: *ReportFields) -> None:
         """A request the bridge held back: kept when it is for the traced code."""
         tracer = self._tracer
+        fault_code = request[3]
         if fault_code == tracer.code:
-            tracer.requested(t_ns, origin, topic, event_type, severity, description, source_id)
+            tracer.requested(*request)
             tracer.held(stage, reason, fault_code)

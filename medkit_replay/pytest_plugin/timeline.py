@@ -26,10 +26,8 @@ MAX_TIMELINE_ROWS = 40
 def recording_start_ns(result: Result) -> int:
     """The recording's first log time (its inputs' starts, else the first message read); 0 when
     nothing was read. ``within`` windows are in seconds from here."""
-    starts = [i.start_ns for i in result.inputs if i.start_ns is not None]
-    if result.summary.start_ns is not None:
-        starts.append(result.summary.start_ns)
-    return min(starts, default=0)
+    start, _ = result.span()
+    return start if start is not None else 0
 
 
 @dataclass(slots=True)

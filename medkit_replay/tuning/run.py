@@ -13,9 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from medkit_replay.config.params import load_parameters
 from medkit_replay.engine.manager import FaultManager
-from medkit_replay.errors import MedkitReplayError
-from medkit_replay.files import FileRefusedError
-from medkit_replay.fleet.run import MAX_ERROR_CHARS, describe_error, opened_recording
+from medkit_replay.fleet.run import MAX_ERROR_CHARS, opened_recording, run_error
 from medkit_replay.model import (
     CLEAR_ROWS,
     EVENT_ROWS,
@@ -190,12 +188,8 @@ def sweep_job(job: SweepJob) -> SweepPart:
         losses: list[Loss] = []
         for options, members in _groups(job.configs, job.variants):
             rows.update(_run_group(job, options, members, losses))
-    except MedkitReplayError as err:
-        error = err.render()
-    except FileRefusedError as err:
-        error = f"{job.path}: {err}"
     except Exception as err:  # one input must not end the sweep
-        error = f"{job.path}: {describe_error(err)}"
+        error = run_error(job.path, err)
     else:
         ordered = [rows[v.index] for v in job.variants]
         return SweepPart(

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 from medkit_replay import replay
-from medkit_replay.model import EvidenceRecording, RecordingTopic, SnapshotCapture, SnapshotTopic
+from medkit_replay.captures import EvidenceRecording, RecordingTopic, SnapshotCapture, SnapshotTopic
 from medkit_replay.outputs.html import render_html
 from medkit_replay.outputs.tables import result_tables
 from medkit_replay.outputs.terminal import render_summary

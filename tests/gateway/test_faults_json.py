@@ -11,30 +11,22 @@ from typing import Any
 
 import pytest
 
+from medkit_replay.captures import EvidenceRecording, SnapshotCapture, SnapshotTopic
+from medkit_replay.gateway.detail_json import fault_detail_body, recordings_held_at, status_object
 from medkit_replay.gateway.errors import GatewayError
 from medkit_replay.gateway.faults_json import (
     StatusFilter,
     entity_fault_list_body,
-    fault_detail_body,
     fault_json,
     fault_list_body,
     in_scope,
     iso8601,
     parse_status_filter,
     query_bool,
-    recordings_held_at,
     scoped_fault,
-    status_object,
 )
 from medkit_replay.history import CorrelationState
-from medkit_replay.model import (
-    Cluster,
-    EvidenceRecording,
-    FaultSnapshot,
-    MutedFault,
-    SnapshotCapture,
-    SnapshotTopic,
-)
+from medkit_replay.model import Cluster, FaultSnapshot, MutedFault
 from tests.gateway.values import T0, fault, recording
 
 

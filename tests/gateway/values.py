@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from medkit_replay.model import EvidenceRecording, FaultSnapshot, Status
+from medkit_replay.captures import EvidenceRecording
+from medkit_replay.model import FaultSnapshot, Status
 
 T0 = 1_700_000_000_000_000_000  # 2023-11-14T22:13:20Z
 

@@ -23,7 +23,6 @@ from medkit_replay.model import (
     FaultEvent,
     FaultSnapshot,
     NearMiss,
-    RecordRows,
     ReportRecord,
     Transition,
 )
@@ -37,6 +36,8 @@ from tests.oracle.json_report import stdlib_dumps
 if TYPE_CHECKING:
     from collections.abc import Iterator
     from pathlib import Path
+
+    from medkit_replay.rows import RecordRows
 
 PIECES = [
     '}, "", {',

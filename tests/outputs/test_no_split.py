@@ -14,6 +14,7 @@ import pytest
 from rich.console import Group
 
 from medkit_replay import replay
+from medkit_replay.captures import EvidenceRecording, RecordingTopic
 from medkit_replay.checks.budget_file import parse_budget
 from medkit_replay.checks.evaluate import CheckRun, Verdict
 from medkit_replay.checks.facts import Offender
@@ -22,7 +23,6 @@ from medkit_replay.cli import main
 from medkit_replay.diffing import diff_reports, render_diff
 from medkit_replay.fleet.run import RunSummary
 from medkit_replay.fleet.terminal import render_summary as fleet_summary
-from medkit_replay.model import EvidenceRecording, RecordingTopic
 from medkit_replay.outputs.console import plain_text
 from medkit_replay.outputs.terminal import render_summary
 from medkit_replay.result import STATUSES

@@ -7,7 +7,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Literal
+from typing import TYPE_CHECKING, Literal, TypeVar
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+_V = TypeVar("_V")
 
 Mode = Literal["hierarchical", "auto_cluster"]
 
@@ -39,20 +44,20 @@ _REPRESENTATIVES = {
 
 def string_to_mode(value: str) -> Mode:
     """Case-insensitive mode name; raises ValueError with upstream's text otherwise."""
-    mode = _MODES.get(value.lower())
-    if mode is None:
-        msg = f"Invalid correlation mode: {value}. Valid values: hierarchical, auto_cluster"
-        raise ValueError(msg)
-    return mode
+    return _named(_MODES, value, "correlation mode", "hierarchical, auto_cluster")
 
 
 def string_to_representative(value: str) -> Representative:
     """Case-insensitive representative name; raises ValueError with upstream's text otherwise."""
-    rep = _REPRESENTATIVES.get(value.lower())
-    if rep is None:
-        msg = f"Invalid representative: {value}. Valid values: first, most_recent, highest_severity"
+    return _named(_REPRESENTATIVES, value, "representative", "first, most_recent, highest_severity")
+
+
+def _named(names: Mapping[str, _V], value: str, what: str, valid: str) -> _V:
+    found = names.get(value.lower())
+    if found is None:
+        msg = f"Invalid {what}: {value}. Valid values: {valid}"
         raise ValueError(msg)
-    return rep
+    return found
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
