@@ -67,6 +67,7 @@ MAX_REQUEST_HEAD_BYTES = 16 * 1024
 MOMENT_PREFIX = "/at/"
 ROSBAG_CATEGORY = "rosbags"
 SUB_ENTITIES = {"areas": "subareas", "components": "subcomponents"}
+_NESTED = "/{kind}/{parent_id}/{nested}/{entity_id}"
 """The nested collections whose members have bulk-data routes of their own."""
 
 
@@ -343,7 +344,9 @@ def build_app(
     """
     gateway = GatewayApp(served, speed=speed, max_streams=max_streams)
     entity = "/{kind}/{entity_id}"
-    nested = "/{kind}/{parent_id}/{nested}/{entity_id}"
+    bulk = [("/bulk-data", gateway.bulk_categories),
+            ("/bulk-data/{category}", gateway.bulk_descriptors),
+            ("/bulk-data/{category}/{file_id}", gateway.bulk_download)]  # fmt: skip
     table: list[tuple[str, Callable[[Request], Awaitable[Response]]]] = [
         ("", gateway.root),
         ("/", gateway.root),
@@ -356,13 +359,9 @@ def build_app(
         (entity, gateway.detail),
         (entity + "/faults", gateway.entity_faults),
         (entity + "/faults/{code}", gateway.fault),
-        (entity + "/bulk-data", gateway.bulk_categories),
-        (entity + "/bulk-data/{category}", gateway.bulk_descriptors),
-        (entity + "/bulk-data/{category}/{file_id}", gateway.bulk_download),
+        # a sub-area's or sub-component's bulk data has routes of its own
+        *((base + tail, fn) for base in (entity, _NESTED) for tail, fn in bulk),
         (entity + "/{relation}", gateway.related),
-        (nested + "/bulk-data", gateway.bulk_categories),
-        (nested + "/bulk-data/{category}", gateway.bulk_descriptors),
-        (nested + "/bulk-data/{category}/{file_id}", gateway.bulk_download),
     ]
     routes = [Route(API + path, _read_only(fn), methods=ALL_METHODS) for path, fn in table]
 

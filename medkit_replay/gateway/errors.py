@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING
 
-from medkit_replay.gateway.entities import validate_entity_id
+from medkit_replay.gateway.entities import SINGULAR, validate_entity_id
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -28,20 +28,10 @@ ERR_VENDOR_ERROR = "vendor-error"
 
 _VENDOR_PREFIX = "x-medkit-"
 
-ID_FIELDS: Mapping[str, str] = {
-    "areas": "area_id",
-    "components": "component_id",
-    "apps": "app_id",
-    "functions": "function_id",
-}
+ID_FIELDS: Mapping[str, str] = {kind: f"{one}_id" for kind, one in SINGULAR.items()}
 """The parameter naming an entity in the fault routes' errors, by route collection."""
 
-TYPE_NAMES: Mapping[str, str] = {
-    "areas": "Area",
-    "components": "Component",
-    "apps": "App",
-    "functions": "Function",
-}
+TYPE_NAMES: Mapping[str, str] = {kind: one.capitalize() for kind, one in SINGULAR.items()}
 """How upstream names an entity type in error messages, by route collection."""
 
 

@@ -11,6 +11,7 @@ the live gateway shows its wall clock.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import TYPE_CHECKING
@@ -30,7 +31,7 @@ if TYPE_CHECKING:
     from collections.abc import Collection, Iterable, Mapping, Sequence
 
     from medkit_replay.history import CorrelationState
-    from medkit_replay.model import Cluster, FaultSnapshot, MutedFault, Status
+    from medkit_replay.model import Cluster, FaultSnapshot, Status
 
 JsonObject = dict[str, object]
 
@@ -152,28 +153,13 @@ def fault_json(fault: FaultSnapshot) -> JsonObject:
     return item
 
 
-def _muted_json(muted: MutedFault) -> JsonObject:
-    return {
-        "fault_code": muted.fault_code,
-        "root_cause_code": muted.root_cause_code,
-        "rule_id": muted.rule_id,
-        "delay_ms": muted.delay_ms,
-    }
-
-
 def _cluster_json(cluster: Cluster) -> JsonObject:
-    return {
-        "cluster_id": cluster.cluster_id,
-        "rule_id": cluster.rule_id,
-        "rule_name": cluster.rule_name,
-        "label": cluster.label,
-        "representative_code": cluster.representative_code,
-        "representative_severity": cluster.representative_severity,
-        "fault_codes": list(cluster.fault_codes),
-        "count": len(cluster.fault_codes),
-        "first_at": unix_seconds(cluster.first_at_ns),
-        "last_at": unix_seconds(cluster.last_at_ns),
-    }
+    """ClusterInfo as the gateway writes it: its fields, the times as Unix seconds."""
+    fields = dataclasses.asdict(cluster)
+    fields["fault_codes"] = list(cluster.fault_codes)
+    fields["first_at"] = unix_seconds(fields.pop("first_at_ns"))
+    fields["last_at"] = unix_seconds(fields.pop("last_at_ns"))
+    return fields
 
 
 def _listed(
@@ -208,7 +194,7 @@ def fault_list_body(
         "cluster_count": len(correlation.clusters),
     }
     if include_muted and correlation.muted:
-        extension["muted_faults"] = [_muted_json(m) for m in correlation.muted]
+        extension["muted_faults"] = [dataclasses.asdict(m) for m in correlation.muted]
     if include_clusters and correlation.clusters:
         extension["clusters"] = [_cluster_json(c) for c in correlation.clusters]
     return {"items": items, "x-medkit": extension}
