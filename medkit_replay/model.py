@@ -172,10 +172,10 @@ class Transition:
     source_id: str | None
 
 
-@spoolable
 @dataclass(frozen=True, slots=True, kw_only=True)
-class ReportRecord:
-    """A ReportFault request that reached the manager, with its verdict."""
+class RequestRecord:
+    """The fields of ReportFields, named, with the event type as its name (FAILED, PASSED):
+    what every record of one request starts with."""
 
     t_ns: int
     origin: Origin
@@ -185,6 +185,13 @@ class ReportRecord:
     severity: int
     description: str
     source_id: str
+
+
+@spoolable
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReportRecord(RequestRecord):
+    """A ReportFault request that reached the manager, with its verdict."""
+
     accepted: bool
     reject_reason: str | None
     # Beyond the contract: the fault after this report, for counter traces ("how close").

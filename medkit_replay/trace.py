@@ -8,6 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from medkit_replay.model import RequestRecord
+
 if TYPE_CHECKING:
     from medkit_replay.model import (
         ClearRecord,
@@ -15,7 +17,6 @@ if TYPE_CHECKING:
         FaultEvent,
         FaultSnapshot,
         MutedFault,
-        Origin,
         ReportRecord,
         Transition,
     )
@@ -53,21 +54,13 @@ class RecordedMessage:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class HeldRequest:
+class HeldRequest(RequestRecord):
     """A request for the fault that never reached the manager, and what held it back.
 
     ``stage`` is ``local_filter`` (the bridge reporter's LocalFilter), ``cooldown`` (the log
     bridge's per-code cooldown) or ``double_counting`` (recorded ReportFault calls win).
     """
 
-    t_ns: int
-    origin: Origin
-    topic: str | None
-    fault_code: str
-    event_type: str
-    severity: int
-    description: str
-    source_id: str
     stage: str
     reason: str
     message: RecordedMessage | None = None
