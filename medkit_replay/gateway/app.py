@@ -52,6 +52,7 @@ if TYPE_CHECKING:
     from starlette.requests import Request
     from starlette.types import ASGIApp, Receive, Scope, Send
 
+    from medkit_replay.captures import EvidenceRecording
     from medkit_replay.gateway.entities import Entity
     from medkit_replay.gateway.recording import ServedRecording
     from medkit_replay.model import FaultSnapshot
@@ -148,8 +149,10 @@ class GatewayApp:
             return discovery_json.route_entity(self.served.entities, kind, params["entity_id"])
         return discovery_json.route_entity(self.served.entities, kind, params["entity_id"])
 
-    def faults_by_code(self, t_ns: int) -> dict[str, FaultSnapshot]:
-        return {f.fault_code: f for f in self.served.history.faults_at(t_ns)}
+    def held(self, t_ns: int) -> tuple[list[EvidenceRecording], dict[str, FaultSnapshot]]:
+        """The black-box recordings and the faults (by code) the manager holds at ``t_ns``."""
+        recordings = recordings_held_at(self.served.result.recordings, t_ns)
+        return recordings, {f.fault_code: f for f in self.served.history.faults_at(t_ns)}
 
     # -- root, health, the recording -------------------------------------------------------
 
@@ -263,11 +266,7 @@ class GatewayApp:
         _, scope, t_ns = self._bulk_scope(request)
         served = self.served
         body = rosbag_descriptors_body(
-            recordings_held_at(served.result.recordings, t_ns),
-            self.faults_by_code(t_ns),
-            scope,
-            rosbag_format=served.rosbag_format,
-            bag_sizes=served.bag_sizes,
+            *self.held(t_ns), scope, rosbag_format=served.rosbag_format, bag_sizes=served.bag_sizes
         )
         return _json(200, body)
 
@@ -275,8 +274,7 @@ class GatewayApp:
         entity, scope, t_ns = self._bulk_scope(request)
         served = self.served
         found = rosbag_download(
-            recordings_held_at(served.result.recordings, t_ns),
-            self.faults_by_code(t_ns),
+            *self.held(t_ns),
             request.path_params["file_id"],
             entity_id=entity.id,
             scope=scope,
