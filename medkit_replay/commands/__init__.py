@@ -80,11 +80,27 @@ def path_option(
     )
 
 
-JOBS_OPTION = click.option(
-    "--jobs",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Worker processes (default: one per CPU; 1 runs in this process).",
+def count_option(
+    *names: str,
+    help: str,
+    default: int | None = None,
+    most: int | None = None,
+    show_default: bool | None = None,
+    metavar: str | None = None,
+) -> Callable[[FC], FC]:
+    """An option taking a whole number from 1 (to ``most``): a count, a bound, a size."""
+    return click.option(
+        *names,
+        type=click.IntRange(min=1, max=most),
+        default=default,
+        show_default=show_default,
+        metavar=metavar,
+        help=help,
+    )
+
+
+JOBS_OPTION = count_option(
+    "--jobs", help="Worker processes (default: one per CPU; 1 runs in this process)."
 )
 """``--jobs``: how many worker processes run the replays (one per CPU by default)."""
 

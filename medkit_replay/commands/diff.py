@@ -17,6 +17,7 @@ import click
 
 from medkit_replay.commands import (
     config_option,
+    count_option,
     input_argument,
     local_paths,
     say_written,
@@ -139,11 +140,9 @@ def _print(diff: ReportDiff, stream: TextIO, notes: list[str]) -> None:
     is_flag=True,
     help="Rewrite BASELINE (a .json report) with the current report; exit 0.",
 )
-@click.option(
+@count_option(
     "--max-report-mb",
     "max_report_mb",
-    type=click.IntRange(min=1),
-    default=None,
     metavar="MB",
     help="Largest report read, plain or decompressed, in MiB (default 1024, or "
     "MEDKIT_REPLAY_MAX_REPORT_MB).",

@@ -14,6 +14,7 @@ import click
 
 from medkit_replay.commands import (
     config_option,
+    count_option,
     input_argument,
     path_option,
 )
@@ -69,10 +70,8 @@ def _at_offset_ns(at: float | None, option: str = "--at") -> int | None:
     help="Start the story at this many seconds from the recording's start (what came before "
     "is counted, not told).",
 )
-@click.option(
+@count_option(
     "--limit",
-    type=click.IntRange(min=1),
-    default=None,
     help="Tell at most this many reports, holds, decisions, status changes, events and clears "
     "(default 10,000); the rest are counted, not kept.",
 )

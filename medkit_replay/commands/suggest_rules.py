@@ -18,6 +18,7 @@ import click
 from medkit_replay.commands import (
     JOBS_OPTION,
     config_option,
+    count_option,
     input_argument,
     local_paths,
     path_option,
@@ -48,16 +49,15 @@ MAX_LISTED = 20
 @click.command("suggest-rules")
 @input_argument("inputs")
 @config_option("ROS 2 parameter file every input is replayed with (repeatable).")
-@click.option(
+@count_option(
     "--window-ms",
-    type=click.IntRange(min=1, max=60000),
     default=DEFAULT_WINDOW_MS,
+    most=60000,
     show_default=True,
     help="A symptom confirms at most this long after its root; a burst's codes this close.",
 )
-@click.option(
+@count_option(
     "--min-support",
-    type=click.IntRange(min=1),
     default=DEFAULT_MIN_SUPPORT,
     show_default=True,
     help="Runs a pattern must be seen in to be proposed.",
@@ -69,9 +69,8 @@ MAX_LISTED = 20
     show_default=True,
     help="Share of the runs with the later code that the pattern must explain.",
 )
-@click.option(
+@count_option(
     "--max-pairs",
-    type=click.IntRange(min=1),
     default=DEFAULT_MAX_PAIRS,
     show_default=True,
     help="Pairs of codes weighed at most; past it, only the codes confirmed in the most runs are "

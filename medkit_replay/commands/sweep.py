@@ -16,6 +16,7 @@ import click
 from medkit_replay.commands import (
     allow_empty_option,
     config_option,
+    count_option,
     executor_options,
     input_argument,
     local_paths,
@@ -58,10 +59,8 @@ from medkit_replay.outputs.console import warn
     "html_path",
     help="Write a self-contained HTML page: trade-offs across variants, codes over the grid.",
 )
-@click.option(
+@count_option(
     "--max-runs",
-    type=click.IntRange(min=1),
-    default=None,
     help="Replays (variants x recordings) run at most (default 20,000): a larger sweep is "
     "refused before it starts.",
 )
