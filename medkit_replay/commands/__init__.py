@@ -165,6 +165,30 @@ def executor_options(timeout_help: str) -> Callable[[FC], FC]:
     return stacked(*options)
 
 
+def check_executor(
+    dask_address: str | None, jobs: int | None, *, strict: bool, budget: object, units: str
+) -> None:
+    """Refuse what ``executor_options`` and ``--strict`` cannot do together, before anything
+    runs: ``--jobs`` with ``--dask``, ``--strict`` without ``--budget`` (``units``: what the
+    command checks, runs or inputs); and say a missing ``dask`` extra at once."""
+    if dask_address is not None and jobs is not None:
+        raise click.UsageError("--jobs and --dask cannot be used together")
+    if strict and budget is None:
+        raise click.UsageError(f"--strict fails {units} of a budget check: give --budget too")
+    if dask_address is not None:
+        from medkit_replay.fleet.cluster import dask_client_type  # noqa: PLC0415
+
+        dask_client_type()
+
+
+def make_folder(path: Path, what: str) -> None:
+    """Create an output folder (and its parents), or say in one line why it cannot be."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise MedkitReplayError(f"cannot create {what}: {err.strerror}", path=str(path)) from None
+
+
 STRICT_HELP = (
     "Fail (exit 1) a recording read only in part: any message, byte or file lost to damage, "
     "named in one line with what it cost (without it, damage is a warning)."

@@ -16,17 +16,19 @@ import click
 
 from medkit_replay.commands import (
     allow_empty_option,
+    check_executor,
     config_option,
     executor_options,
     input_argument,
     local_paths,
+    make_folder,
     path_option,
     say_damage,
     strict_option,
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.errors import InputError
 
 DEFAULT_OUT = Path("fleet-report")
 
@@ -83,17 +85,12 @@ def fleet(
     from medkit_replay.config.params import load_parameters  # noqa: PLC0415
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.config.release import release_of  # noqa: PLC0415
-    from medkit_replay.fleet.cluster import dask_client_type, run_on_dask  # noqa: PLC0415
+    from medkit_replay.fleet.cluster import run_on_dask  # noqa: PLC0415
     from medkit_replay.fleet.discover import discover  # noqa: PLC0415
     from medkit_replay.fleet.workers import run_all  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
-    if dask_address is not None and jobs is not None:
-        raise click.UsageError("--jobs and --dask cannot be used together")
-    if strict and budget is None:
-        raise click.UsageError("--strict fails runs of a budget check: give --budget too")
-    if dask_address is not None:
-        dask_client_type()  # a missing extra is said before anything runs
+    check_executor(dask_address, jobs, strict=strict, budget=budget, units="runs")
     config_paths = config_files(configs)  # a bad config stops the fleet before it starts
     release = release_of(load_parameters(configs)).name
     parsed_budget = None
@@ -116,12 +113,7 @@ def fleet(
             "no recording found (rosbag2 folders, .mcap, .db3, .bag or .jsonl files)",
             path=", ".join(str(d) for d in input_dirs),
         )
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise MedkitReplayError(
-            f"cannot create the report folder: {err.strerror}", path=str(out_dir)
-        ) from None
+    make_folder(out_dir, "the report folder")
     bar = fleet_progress(sys.stderr, len(recordings), quiet=quiet)
     with bar if bar is not None else nullcontext():
         if dask_address is not None:

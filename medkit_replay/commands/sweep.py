@@ -15,11 +15,13 @@ import click
 
 from medkit_replay.commands import (
     allow_empty_option,
+    check_executor,
     config_option,
     count_option,
     executor_options,
     input_argument,
     local_paths,
+    make_folder,
     path_option,
     say_damage,
     say_written,
@@ -27,7 +29,7 @@ from medkit_replay.commands import (
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.errors import InputError
 from medkit_replay.outputs.console import warn
 
 
@@ -100,7 +102,6 @@ def sweep(
           --vary fault_manager.correlation.config_file=rules_a.yaml,rules_b.yaml
     """
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
-    from medkit_replay.fleet.cluster import dask_client_type  # noqa: PLC0415
     from medkit_replay.fleet.discover import discover  # noqa: PLC0415
     from medkit_replay.fleet.progress import fleet_progress  # noqa: PLC0415
     from medkit_replay.fleet.workers import default_jobs  # noqa: PLC0415
@@ -115,12 +116,7 @@ def sweep(
     )
     from medkit_replay.tuning.terminal import print_summary, summary_renderables  # noqa: PLC0415
 
-    if dask_address is not None and jobs is not None:
-        raise click.UsageError("--jobs and --dask cannot be used together")
-    if strict and budget is None:
-        raise click.UsageError("--strict fails inputs of a budget check: give --budget too")
-    if dask_address is not None:
-        dask_client_type()  # a missing extra is said before anything runs
+    check_executor(dask_address, jobs, strict=strict, budget=budget, units="inputs")
     config_paths = config_files(configs)
     parsed = [parse_vary(spec) for spec in varies]
     recordings = discover(inputs)
@@ -151,12 +147,7 @@ def sweep(
     parquet = False
     if out_dir is not None:
         parquet = _has_pyarrow()
-        try:
-            out_dir.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise MedkitReplayError(
-                f"cannot create the tables folder: {err.strerror}", path=str(out_dir)
-            ) from None
+        make_folder(out_dir, "the tables folder")
     for warning in grid.warnings:
         warn(warning)
     workers = 1 if dask_address is None and jobs == 1 else (jobs or default_jobs())
