@@ -17,7 +17,7 @@ from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import is_remote
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Iterator
+    from collections.abc import Callable, Iterable, Iterator, Sequence
 
     from click.decorators import FC
 
@@ -187,6 +187,25 @@ def make_folder(path: Path, what: str) -> None:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise MedkitReplayError(f"cannot create {what}: {err.strerror}", path=str(path)) from None
+
+
+def foreign_clips(refused: Sequence[str], *, outputs: bool) -> MedkitReplayError:
+    """The error for clip folders the evidence folder holds but this tool did not write
+    (``Result.evidence_refused``); ``outputs``: the command's other outputs were written."""
+    from medkit_replay.evidence.folder import MARKER  # noqa: PLC0415
+
+    first, *others = refused
+    more = f" ({len(others):,} more folders alike)" if others else ""
+    written = (
+        "no recording was written, the other outputs were"
+        if outputs
+        else ("no recording was written")
+    )
+    return MedkitReplayError(
+        f"has a clip's name but is not a clip this tool wrote (no {MARKER} in it){more}; "
+        f"{written}: write the clips to another folder",
+        path=first,
+    )
 
 
 STRICT_HELP = (

@@ -15,6 +15,7 @@ import click
 
 from medkit_replay.commands import (
     config_option,
+    foreign_clips,
     input_argument,
     local_paths,
     path_option,
@@ -23,7 +24,6 @@ from medkit_replay.commands import (
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs import OUTPUTS, FileOutput
 
 if TYPE_CHECKING:
@@ -161,16 +161,7 @@ def analyze(
             result, json_out, chosen, writers, quiet=quiet, ahead=ahead, everything=everything
         )
     if result.evidence_refused:
-        from medkit_replay.evidence.folder import MARKER  # noqa: PLC0415
-
-        first, *others = result.evidence_refused
-        more = f" ({len(others):,} more folders alike)" if others else ""
-        raise MedkitReplayError(
-            f"has a clip's name but is not a clip this tool wrote (no {MARKER} in it){more}; "
-            "no recording was written, the other outputs were: write the clips to another "
-            "folder",
-            path=first,
-        )
+        raise foreign_clips(result.evidence_refused, outputs=True)
 
 
 def prepare_reports(

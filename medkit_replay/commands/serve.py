@@ -19,6 +19,7 @@ import click
 
 from medkit_replay.commands import (
     config_option,
+    foreign_clips,
     input_argument,
     local_paths,
     path_option,
@@ -204,13 +205,10 @@ def _replay(
             history=history,
         )
     if result.evidence_refused:
-        from medkit_replay.evidence.folder import MARKER  # noqa: PLC0415
+        raise foreign_clips(result.evidence_refused, outputs=False)
+    from medkit_replay.outputs.console import warn  # noqa: PLC0415
+    from medkit_replay.text import printable  # noqa: PLC0415
 
-        raise MedkitReplayError(
-            f"has a clip's name but is not a clip this tool wrote (no {MARKER} in it): "
-            "write the clips to another folder",
-            path=result.evidence_refused[0],
-        )
-    for line in result.warnings:
-        click.echo(f"medkit-replay: warning: {line}", err=True)
+    for line in result.warnings:  # recorded text: shown escaped, as the summary shows it
+        warn(printable(line))
     return served_recording(result, history, graph, at_sec)

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from medkit_replay.gateway.entities import discover
+from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
@@ -19,8 +20,6 @@ if TYPE_CHECKING:
     from medkit_replay.gateway.entities import Entities
     from medkit_replay.history import FaultHistory
     from medkit_replay.result import Result
-
-NS_PER_SEC = 1_000_000_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,14 +69,8 @@ class ServedRecording:
             "tool": "medkit-replay",
             "tool_version": result.tool_version,
             "upstream_release": result.upstream_release,
-            "inputs": [
-                {
-                    "path": s.path,
-                    "storage": s.storage,
-                    "start_ns": s.start_ns,
-                    "end_ns": s.end_ns,
-                    "message_count": s.message_count,
-                }
+            "inputs": [  # as the report lists them, without the topics
+                {f.name: getattr(s, f.name) for f in dataclasses.fields(s) if f.name != "topics"}
                 for s in result.inputs
             ],
             "start_ns": self.origin_ns,
@@ -96,7 +89,7 @@ class ServedRecording:
 
 
 _FORMATS = {".mcap": "mcap", ".db3": "sqlite3"}
-_STORAGE_SUFFIXES = tuple(_FORMATS)
+"""A clip's storage file by suffix, and the format the gateway names it by."""
 
 
 def served_recording(
@@ -118,7 +111,7 @@ def served_recording(
     for recording in result.recordings:
         if recording.path is not None:
             folder = [p for p in Path(recording.path).iterdir() if p.is_file()]
-            files = sorted(p for p in folder if p.suffix in _STORAGE_SUFFIXES)
+            files = sorted(p for p in folder if p.suffix in _FORMATS)
             if len(files) == 1:
                 clips[recording.recording_id] = files[0]
                 # The gateway's size_bytes: the bag folder's files on disk.

@@ -10,7 +10,9 @@ gateway, the stream ends after the recording's last event.
 from __future__ import annotations
 
 import asyncio
+import itertools
 import time
+import weakref
 from bisect import bisect_left
 from typing import TYPE_CHECKING
 
@@ -24,17 +26,16 @@ from medkit_replay.gateway.stream_json import (
     parse_last_event_id,
     sse_event,
 )
+from medkit_replay.model import NS_PER_SEC
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator
 
     from medkit_replay.gateway.recording import ServedRecording
 
-NS_PER_SEC = 1_000_000_000
-
 
 class EventStream:
-    """Opens paced event streams over one recording's events, counting the open ones."""
+    """Opens paced event streams over one recording's events, at most ``max_clients`` at once."""
 
     def __init__(self, served: ServedRecording, *, speed: float, max_clients: int) -> None:
         self.events = served.result.events
@@ -43,7 +44,14 @@ class EventStream:
         self.times = [event.t_ns for event in self.events]
         self.speed = speed
         self.max_clients = max_clients
-        self.open = 0
+        # A stream is open while its generator lives and has not ended; one a client dropped
+        # before it started is collected, so no count can be left behind.
+        self._streams: weakref.WeakSet[AsyncIterator[str]] = weakref.WeakSet()
+
+    @property
+    def open(self) -> int:
+        """Streams open now."""
+        return sum(1 for stream in self._streams if getattr(stream, "ag_frame", None) is not None)
 
     def response(self, header: str | None, start_ns: int | None) -> StreamingResponse:
         """A stream for one client: after ``Last-Event-ID`` (``header``), or from the first
@@ -57,9 +65,10 @@ class EventStream:
         first = parse_last_event_id(header, len(self.events))
         if first == 0 and start_ns is not None:
             first = bisect_left(self.times, start_ns)
-        self.open += 1
+        frames = self._frames(first)
+        self._streams.add(frames)
         return StreamingResponse(
-            self._frames(first),
+            frames,
             media_type="text/event-stream",
             headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
         )
@@ -68,20 +77,18 @@ class EventStream:
         """Frames of events ``first + 1`` (1-based ids) onwards, each sent when its bag time
         comes at ``speed`` times the recorded pace (0: at once); the pace uses the monotonic
         clock, the events keep bag time."""
-        try:
-            times, events, speed = self.times, self.events, self.speed
-            if first >= len(times):
-                return
-            origin_ns, started = times[first], time.monotonic()
-            for index in range(first, len(times)):
-                if speed > 0:
-                    due = started + (times[index] - origin_ns) / NS_PER_SEC / speed
-                    while (wait := due - time.monotonic()) > 0:
-                        await asyncio.sleep(min(wait, KEEPALIVE_INTERVAL_SEC))
-                        if due - time.monotonic() > 0:
-                            yield KEEPALIVE
-                event = events[index]
-                app = event_app_id(event.fault, self.apps, self.node_to_app)
-                yield sse_event(event, index + 1, app_id=app)
-        finally:
-            self.open -= 1
+        times, speed = self.times, self.speed
+        if first >= len(times):
+            return
+        origin_ns, started = times[first], time.monotonic()
+        # In order from the first asked: a spool read by index would reload a chunk each
+        # time two streams take turns.
+        for index, event in enumerate(itertools.islice(self.events, first, None), first):
+            if speed > 0:
+                due = started + (times[index] - origin_ns) / NS_PER_SEC / speed
+                while (wait := due - time.monotonic()) > 0:
+                    await asyncio.sleep(min(wait, KEEPALIVE_INTERVAL_SEC))
+                    if due - time.monotonic() > 0:
+                        yield KEEPALIVE
+            app = event_app_id(event.fault, self.apps, self.node_to_app)
+            yield sse_event(event, index + 1, app_id=app)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import time
 from typing import TYPE_CHECKING
 
 import pytest
@@ -352,3 +353,22 @@ def test_the_release_modelled_is_served(tmp_path: Path) -> None:
         answer = client.get(f"/api/v1/apps/{app}/faults/{'C' * 200}")
         assert answer.status_code == 503
         validate(answer.json(), "GenericError")
+
+
+def test_a_stream_a_client_closes_frees_its_slot(served: ServedRecording) -> None:
+    slow = build_app(served, speed=1e-6)
+    with running(slow) as client, client.stream("GET", "/api/v1/faults/stream") as first:
+        lines = first.iter_lines()
+        assert next(lines).startswith("id: 1")
+        with client.stream("GET", "/api/v1/faults/stream") as second:
+            second_lines = second.iter_lines()
+            assert next(second_lines).startswith("id: 1")
+        # The second client went away: its slot is free again (the server notices the
+        # closed connection when it next writes or polls it).
+        deadline = time.monotonic() + 10
+        while True:
+            with client.stream("GET", "/api/v1/faults/stream") as third:
+                if third.status_code == 200:
+                    break
+            assert time.monotonic() < deadline, "the closed stream's slot was never freed"
+            time.sleep(0.1)
