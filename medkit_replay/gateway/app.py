@@ -24,6 +24,7 @@ from medkit_replay.gateway.bulk_json import (
     rosbag_download,
 )
 from medkit_replay.gateway.detail_json import fault_detail_body, recordings_held_at
+from medkit_replay.gateway.entities import KINDS
 from medkit_replay.gateway.errors import (
     ERR_INTERNAL_ERROR,
     ERR_INVALID_REQUEST,
@@ -58,7 +59,6 @@ if TYPE_CHECKING:
     from medkit_replay.model import FaultSnapshot
 
 API = "/api/v1"
-KINDS = ("areas", "components", "apps", "functions")
 READ_METHODS = frozenset({"GET", "HEAD"})
 ALL_METHODS = ["GET", "HEAD", "POST", "PUT", "PATCH", "DELETE"]
 MAX_RESPONSE_BYTES = 256 * 1024 * 1024
@@ -68,8 +68,8 @@ MAX_REQUEST_HEAD_BYTES = 16 * 1024
 MOMENT_PREFIX = "/at/"
 ROSBAG_CATEGORY = "rosbags"
 SUB_ENTITIES = {"areas": "subareas", "components": "subcomponents"}
-_NESTED = "/{kind}/{parent_id}/{nested}/{entity_id}"
 """The nested collections whose members have bulk-data routes of their own."""
+_NESTED = "/{kind}/{parent_id}/{nested}/{entity_id}"
 
 
 class MomentPrefix:
@@ -107,6 +107,15 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _asked_seconds(request: Request) -> float | None:
+    """The moment a request names: ``?at=`` first, else the ``/at/`` base; None: neither."""
+    text = request.query_params.get("at")
+    if text is not None:
+        return _seconds(text)
+    prefixed = request.scope.get("medkit_at")
+    return prefixed if isinstance(prefixed, float) else None
+
+
 def _json(status: int, body: object, headers: dict[str, str] | None = None) -> Response:
     data = body_bytes(body)
     if len(data) > MAX_RESPONSE_BYTES:
@@ -128,11 +137,7 @@ class GatewayApp:
 
     def moment(self, request: Request) -> int:
         """Bag time the request asks about: ``?at=``, else the ``/at/`` prefix, else ``--at``."""
-        text = request.query_params.get("at")
-        if text is not None:
-            return self.served.moment(_seconds(text))
-        prefixed = request.scope.get("medkit_at")
-        return self.served.moment(prefixed if isinstance(prefixed, float) else None)
+        return self.served.moment(_asked_seconds(request))
 
     def entity(self, request: Request) -> Entity:
         """The entity of a ``/{kind}/{id}/...`` route (a nested sub-area's or sub-component's
@@ -293,12 +298,11 @@ class GatewayApp:
     # -- the event stream ------------------------------------------------------------------
 
     async def fault_stream(self, request: Request) -> Response:
-        text = request.query_params.get("at")
-        prefixed = request.scope.get("medkit_at")
-        start = _seconds(text) if text is not None else prefixed
+        # The stream starts at a moment only when one is named (not at --at's default).
+        start = _asked_seconds(request)
         return self.stream.response(
             request.headers.get("last-event-id"),
-            self.served.moment(start) if isinstance(start, float) else None,
+            self.served.moment(start) if start is not None else None,
         )
 
 
