@@ -29,9 +29,6 @@ from medkit_replay.errors import MedkitReplayError
 if TYPE_CHECKING:
     from medkit_replay.gateway.recording import ServedRecording
 
-MAX_REQUEST_BYTES = 16 * 1024
-"""h11's bound on a request still arriving (the app refuses a larger complete one, 431)."""
-
 
 def _finite(_ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
     if value is not None and (not math.isfinite(value) or value < 0):
@@ -109,7 +106,7 @@ def serve(
     try:
         import uvicorn  # noqa: PLC0415
 
-        from medkit_replay.gateway.app import build_app  # noqa: PLC0415
+        from medkit_replay.gateway.app import MAX_REQUEST_HEAD_BYTES, build_app  # noqa: PLC0415
     except ImportError as err:
         raise MedkitReplayError(
             f"serve needs the 'serve' extra (pip install 'medkit-replay[serve]'): {err}"
@@ -133,8 +130,10 @@ def serve(
         config = uvicorn.Config(
             app,
             log_level="warning",
-            http="h11",  # the request bound below is h11's (httptools would ignore it)
-            h11_max_incomplete_event_size=MAX_REQUEST_BYTES,
+            # h11 cuts off a request head still arriving past the app's bound (httptools
+            # would ignore the setting); the app answers 431 to a larger complete one.
+            http="h11",
+            h11_max_incomplete_event_size=MAX_REQUEST_HEAD_BYTES,
             timeout_graceful_shutdown=1,
             lifespan="off",
         )
