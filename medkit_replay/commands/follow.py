@@ -15,10 +15,11 @@ from typing import TYPE_CHECKING, TextIO
 import click
 
 from medkit_replay.commands import config_option
-from medkit_replay.commands.analyze import (
+from medkit_replay.commands.reports import (
     ALL_OPTION,
     prepare_reports,
     report_options,
+    summary_stream,
     write_reports,
 )
 from medkit_replay.commands.streams import discard_stdout
@@ -29,6 +30,7 @@ from medkit_replay.outputs.console import echo
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
+    from medkit_replay.commands.reports import ReportTargets
     from medkit_replay.inputs.follow import Follow
     from medkit_replay.model import FaultEvent, Transition
     from medkit_replay.result import Result
@@ -61,11 +63,7 @@ STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 def follow(
     recording: Path,
     configs: tuple[Path, ...],
-    json_out: str | None,
-    csv_dir: Path | None,
-    parquet_dir: Path | None,
-    mcap_out: Path | None,
-    html_out: Path | None,
+    reports: ReportTargets,
     poll_s: float,
     idle_timeout_s: float | None,
     quiet: bool,
@@ -88,10 +86,9 @@ def follow(
     # Imported here, so that --help and the other commands start without them.
     from medkit_replay.inputs.follow import Follow  # noqa: PLC0415
 
-    targets = {"--csv": csv_dir, "--parquet": parquet_dir, "--mcap": mcap_out, "--html": html_out}
-    chosen, writers = prepare_reports([recording], configs, json_out, targets)
+    prepared = prepare_reports([recording], configs, reports)
     control = Follow(poll_s=poll_s, idle_timeout_s=idle_timeout_s)
-    stream = sys.stderr if json_out == "-" else sys.stdout
+    stream = summary_stream(reports.json_out)
     with _stop_on_signals(control):
         _wait_to_appear(recording, control)
         echo(f"following {recording} (every {control.poll_s:g} s; Ctrl-C writes the report)\n",
@@ -105,7 +102,7 @@ def follow(
     echo(f"medkit-replay: {ending}; writing the reports\n", sys.stderr)
     for note in control.notes:
         echo(f"medkit-replay: note: {note}\n", sys.stderr)
-    write_reports(result, json_out, chosen, writers, quiet=quiet, everything=everything)
+    write_reports(result, prepared, quiet=quiet, everything=everything)
 
 
 def _replay_following(
