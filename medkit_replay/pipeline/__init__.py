@@ -21,16 +21,11 @@ from medkit_replay.errors import InputError
 from medkit_replay.evidence import EvidenceOptions, collect_evidence
 from medkit_replay.inputs import is_remote, open_recording
 from medkit_replay.model import (
-    CLEAR_ROWS,
     EVENT_ROWS,
-    REPORT_ROWS,
     TRANSITION_ROWS,
-    ClearRecord,
-    EngineOutput,
     FaultEvent,
     Phase,
     Progress,
-    ReportRecord,
     Transition,
 )
 from medkit_replay.parity import compare, compare_responses, suggest_action_sources
@@ -39,8 +34,8 @@ from medkit_replay.pipeline.consumption import consumption
 from medkit_replay.pipeline.loop import replay_loop
 from medkit_replay.pipeline.meter import Meter
 from medkit_replay.pipeline.routing import Gate, Request, Router, recorded_report_codes
+from medkit_replay.pipeline.spooled import spooled_logs
 from medkit_replay.result import LOG_BRIDGE_HINT
-from medkit_replay.spool import Row, SpillListener, Spool
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
@@ -53,6 +48,7 @@ if TYPE_CHECKING:
     from medkit_replay.pipeline.routing import Handler
     from medkit_replay.pipeline.tracing import Tracer
     from medkit_replay.result import Consumption, Result
+    from medkit_replay.spool import Row, SpillListener, Spool
     from medkit_replay.trace import FaultTrace
 
 __all__ = ["PROGRESS_EVERY", "Pass", "Phase", "Progress", "replay", "replay_pass"]
@@ -123,12 +119,9 @@ def replay(
     snapshots, snapshot_warnings = snapshot_config(params.node("fault_manager"), release)
     warnings += snapshot_warnings
 
-    listener = spill_listener
-    events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS, listener=listener)
-    transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS, listener=listener)
-    reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS, listener=listener)
-    clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS, listener=listener)
-    output = EngineOutput(events=events, transitions=transitions, reports=reports, clears=clears)
+    spools = spooled_logs(spill_listener)
+    events, transitions, reports, clears = spools
+    output = spools.output()
     manager = FaultManager(manager_config, output)
     # Rows straight into the spools' tails; the loop settles them now and then.
     event_sink, transition_sink = events.row_sink(), transitions.row_sink()
@@ -227,7 +220,7 @@ def replay(
     if spill_listener is not None:
         # A spool that spilled already hands the listener its last records too (one that
         # never did is short: the report writes it at once).
-        for spool in (events, transitions, reports, clears):
+        for spool in spools:
             if spool.batch_count > 1:
                 spool.spill()
     config = effective_config(manager_config, options, tuple(str(f) for f in params.files))
@@ -239,7 +232,7 @@ def replay(
         messages,
         warnings,
         parity,
-        (events, transitions, reports, clears),
+        spools,
         config,
         consumed,
     )

@@ -14,23 +14,11 @@ from typing import TYPE_CHECKING, Any
 from medkit_replay.config.params import load_parameters
 from medkit_replay.engine.manager import FaultManager
 from medkit_replay.fleet.run import MAX_ERROR_CHARS, opened_recording, run_error
-from medkit_replay.model import (
-    CLEAR_ROWS,
-    EVENT_ROWS,
-    REPORT_ROWS,
-    TRANSITION_ROWS,
-    ClearRecord,
-    EngineOutput,
-    FaultEvent,
-    Loss,
-    ReportRecord,
-    Transition,
-    total_loss,
-)
+from medkit_replay.model import EngineOutput, Loss, total_loss
 from medkit_replay.pipeline import replay_pass
 from medkit_replay.pipeline.assemble import assemble_result
 from medkit_replay.pipeline.routing import Router
-from medkit_replay.spool import Spool
+from medkit_replay.pipeline.spooled import spooled_logs
 from medkit_replay.tuning.fanout import FanOut
 from medkit_replay.tuning.grid import variant_config
 from medkit_replay.tuning.metrics import CodeRow, RunRow, Tally, run_row
@@ -41,6 +29,7 @@ if TYPE_CHECKING:
     from medkit_replay.checks import Budget
     from medkit_replay.config.replay_options import ReplayOptions
     from medkit_replay.engine.manager import Row
+    from medkit_replay.spool import Spool
     from medkit_replay.tuning.grid import Variant, VariantConfig
 
 
@@ -87,17 +76,12 @@ class _Variant:
         report, event, transition = self.tally.sinks()
         self.logs: tuple[Spool[Any], ...] = ()
         if spooled:
-            events: Spool[FaultEvent] = Spool(codec=EVENT_ROWS)
-            transitions: Spool[Transition] = Spool(codec=TRANSITION_ROWS)
-            reports: Spool[ReportRecord] = Spool(codec=REPORT_ROWS)
-            clears: Spool[ClearRecord] = Spool(codec=CLEAR_ROWS)
-            output = EngineOutput(
-                events=events, transitions=transitions, reports=reports, clears=clears
-            )
-            self.logs = (events, transitions, reports, clears)
-            report = _tee(report, reports.row_sink())
-            event = _tee(event, events.row_sink())
-            transition = _tee(transition, transitions.row_sink())
+            logs = spooled_logs()
+            output = logs.output()
+            self.logs = logs
+            report = _tee(report, logs.reports.row_sink())
+            event = _tee(event, logs.events.row_sink())
+            transition = _tee(transition, logs.transitions.row_sink())
         else:
             output = EngineOutput()
         self.manager = FaultManager(config.manager, output)
