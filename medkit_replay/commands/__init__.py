@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
     from click.decorators import FC
 
+    from medkit_replay.checks import Budget
     from medkit_replay.model import Loss
 
 CONFIG_HELP = "ROS 2 parameter file (repeatable; later files override earlier ones)."
@@ -245,12 +246,26 @@ def say_written(paths: Iterable[Path | str], *, quiet: bool = False) -> None:
         click.echo(f"wrote {printable(str(path))}", err=True)
 
 
-def say_damage(losses: Iterable[Loss]) -> bool:
-    """Print ``--strict``'s one line per recording read only in part (on standard error);
-    whether there was any."""
-    from medkit_replay.model import strict_failure  # noqa: PLC0415  # not for --help
+def optional_budget(path: Path | None, *, allow_empty: bool) -> Budget | None:
+    """The ``--budget`` file read (before any replay), or None without one."""
+    if path is None:
+        return None
+    from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
 
-    lines = [strict_failure(loss) for loss in losses]
-    for line in lines:
-        click.echo(line, err=True)
-    return bool(lines)
+    return load_budget(path, allow_empty=allow_empty)
+
+
+def exit_on_failure(
+    failed: bool, *, budget: Budget | None, strict: bool, losses: Iterable[Loss]
+) -> None:
+    """Exit 1 when a budget was given and some run failed, or (with ``--strict``, each said in
+    a line on standard error) a recording was read only in part; else return."""
+    if strict:
+        from medkit_replay.model import strict_failure  # noqa: PLC0415  # not for --help
+
+        lines = [strict_failure(loss) for loss in losses]
+        for line in lines:
+            click.echo(line, err=True)
+        failed = failed or bool(lines)
+    if budget is not None and failed:
+        click.get_current_context().exit(1)

@@ -19,16 +19,16 @@ from medkit_replay.commands import (
     check_executor,
     config_option,
     executor_options,
+    exit_on_failure,
     input_argument,
     local_paths,
     make_folder,
+    optional_budget,
     path_option,
-    say_damage,
     strict_option,
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import InputError
 
 DEFAULT_OUT = Path("fleet-report")
 
@@ -86,18 +86,14 @@ def fleet(
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.config.release import release_of  # noqa: PLC0415
     from medkit_replay.fleet.cluster import run_on_dask  # noqa: PLC0415
-    from medkit_replay.fleet.discover import discover  # noqa: PLC0415
+    from medkit_replay.fleet.discover import discover_some  # noqa: PLC0415
     from medkit_replay.fleet.workers import run_all  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
 
     check_executor(dask_address, jobs, strict=strict, budget=budget, units="runs")
     config_paths = config_files(configs)  # a bad config stops the fleet before it starts
     release = release_of(load_parameters(configs)).name
-    parsed_budget = None
-    if budget is not None:
-        from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
-
-        parsed_budget = load_budget(budget, allow_empty=allow_empty)
+    parsed_budget = optional_budget(budget, allow_empty=allow_empty)
     from medkit_replay.fleet.report import (  # noqa: PLC0415  # pandas: only when it runs
         FILES,
         tabulated,
@@ -107,12 +103,7 @@ def fleet(
 
     protected = [*local_paths(input_dirs), *config_paths, *([budget] if budget is not None else [])]
     refuse_overlap(protected, [("--out", out_dir), *(("--out", out_dir / f) for f in FILES)])
-    recordings = discover(input_dirs)
-    if not recordings:
-        raise InputError(
-            "no recording found (rosbag2 folders, .mcap, .db3, .bag or .jsonl files)",
-            path=", ".join(str(d) for d in input_dirs),
-        )
+    recordings = discover_some(input_dirs)
     make_folder(out_dir, "the report folder")
     bar = fleet_progress(sys.stderr, len(recordings), quiet=quiet)
     with bar if bar is not None else nullcontext():
@@ -136,7 +127,5 @@ def fleet(
         with standard_output("the fleet summary"):
             print_summary(runs, sys.stdout, out_dir, release)
     failed = any(not run.ok or run.budget == "fail" for run in runs)
-    if strict and say_damage(run.lost for run in runs if run.lost is not None):
-        failed = True
-    if parsed_budget is not None and failed:
-        click.get_current_context().exit(1)
+    losses = (run.lost for run in runs if run.lost is not None)
+    exit_on_failure(failed, budget=parsed_budget, strict=strict, losses=losses)

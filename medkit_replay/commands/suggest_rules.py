@@ -26,7 +26,7 @@ from medkit_replay.commands import (
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import InputError, MedkitReplayError
+from medkit_replay.errors import MedkitReplayError
 from medkit_replay.outputs.console import echo, warn
 from medkit_replay.text import printable
 from medkit_replay.tuning.suggest import (
@@ -112,7 +112,7 @@ def suggest_rules(
       medkit-replay suggest-rules missions/ --window-ms 1000 --min-support 5 --validate
     """
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
-    from medkit_replay.fleet.discover import discover  # noqa: PLC0415
+    from medkit_replay.fleet.discover import discover_some  # noqa: PLC0415
     from medkit_replay.fleet.workers import run_jobs  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap, write_text_atomic  # noqa: PLC0415
     from medkit_replay.tuning.observe import failed_observation, observe  # noqa: PLC0415
@@ -120,12 +120,7 @@ def suggest_rules(
 
     config_paths = config_files(configs)
     refuse_overlap([*local_paths(inputs), *config_paths], [("--out", out_path)] if out_path else [])
-    recordings = discover(inputs)
-    if not recordings:
-        raise InputError(
-            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
-            path=", ".join(str(d) for d in inputs),
-        )
+    recordings = discover_some(inputs)
     jobs_list = [(p if isinstance(p, str) else str(p.absolute()), str(p)) for p in recordings]
     base = tuple(str(Path(c).absolute()) for c in configs)
     observed: list[Observed | None] = [None] * len(recordings)

@@ -19,17 +19,17 @@ from medkit_replay.commands import (
     config_option,
     count_option,
     executor_options,
+    exit_on_failure,
     input_argument,
     local_paths,
     make_folder,
+    optional_budget,
     path_option,
-    say_damage,
     say_written,
     strict_option,
     writing,
 )
 from medkit_replay.commands.streams import standard_output
-from medkit_replay.errors import InputError
 from medkit_replay.outputs.console import warn
 
 
@@ -102,7 +102,7 @@ def sweep(
           --vary fault_manager.correlation.config_file=rules_a.yaml,rules_b.yaml
     """
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
-    from medkit_replay.fleet.discover import discover  # noqa: PLC0415
+    from medkit_replay.fleet.discover import discover_some  # noqa: PLC0415
     from medkit_replay.fleet.progress import fleet_progress  # noqa: PLC0415
     from medkit_replay.fleet.workers import default_jobs  # noqa: PLC0415
     from medkit_replay.outputs.atomic import refuse_overlap  # noqa: PLC0415
@@ -119,19 +119,10 @@ def sweep(
     check_executor(dask_address, jobs, strict=strict, budget=budget, units="inputs")
     config_paths = config_files(configs)
     parsed = [parse_vary(spec) for spec in varies]
-    recordings = discover(inputs)
-    if not recordings:
-        raise InputError(
-            "no recording found (rosbag2 folders, .mcap, .db3 or .jsonl files)",
-            path=", ".join(str(d) for d in inputs),
-        )
+    recordings = discover_some(inputs)
     check_runs(parsed, len(recordings), max_runs)  # before a variant is built
     grid = checked_grid(configs, parsed)
-    parsed_budget = None
-    if budget is not None:
-        from medkit_replay.checks import load_budget  # noqa: PLC0415  # only with a budget
-
-        parsed_budget = load_budget(budget, allow_empty=allow_empty)
+    parsed_budget = optional_budget(budget, allow_empty=allow_empty)
     varied_files = [
         Path(str(s.value))
         for v in grid.variants
@@ -183,10 +174,7 @@ def sweep(
             print_summary(sys.stdout, parts)
     say_written([p for p in (html_path, out_dir) if p is not None], quiet=quiet)
     over = any(t.budget_failed or t.failed_runs for t in outcome.variants)
-    if strict and say_damage(outcome.lost):
-        over = True
-    if parsed_budget is not None and over:
-        click.get_current_context().exit(1)
+    exit_on_failure(over, budget=parsed_budget, strict=strict, losses=outcome.lost)
 
 
 def _has_pyarrow() -> bool:

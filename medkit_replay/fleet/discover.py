@@ -32,7 +32,7 @@ from medkit_replay.inputs.recording import READERS, input_kind
 from medkit_replay.inputs.remote.store import list_objects, open_store, parse_location
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from collections.abc import Iterable, Sequence
     from pathlib import PurePath
 
 FILE_KINDS = frozenset(kind for kind in READERS if kind != "dir")
@@ -205,4 +205,19 @@ def discover(roots: Iterable[str | Path]) -> list[Path | str]:
             if key not in seen:
                 seen.add(key)
                 recordings.append(path)
+    return recordings
+
+
+def discover_some(roots: Sequence[str | Path]) -> list[Path | str]:
+    """:func:`discover`, for a command that needs at least one recording.
+
+    Raises:
+        InputError: as :func:`discover`, or no recording was found under any root.
+    """
+    recordings = discover(roots)
+    if not recordings:
+        raise InputError(
+            "no recording found (rosbag2 folders, .mcap, .db3, .bag or .jsonl files)",
+            path=", ".join(str(root) for root in roots),
+        )
     return recordings

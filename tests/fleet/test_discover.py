@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from medkit_replay.errors import InputError
-from medkit_replay.fleet.discover import discover, is_bag_directory, natural_key
+from medkit_replay.fleet.discover import discover, discover_some, is_bag_directory, natural_key
 from tests.fleet.fleet_support import FIXTURES, SAMPLES, build_fleet, report, write_script
 from tests.inputs.builders import diag, write_bag
 
@@ -155,3 +155,17 @@ def test_ros1_bags_are_recordings_also_while_active(tmp_path: Path) -> None:
     for name in ("a.bag", "b.bag.active", "c.active", "d.bag.orig"):
         (tmp_path / "robot" / name).write_bytes(b"")
     assert [Path(p).name for p in discover([tmp_path])] == ["a.bag", "b.bag.active"]
+
+
+def test_a_command_that_needs_recordings_names_every_kind_it_looks_for(tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "also").mkdir()
+    assert discover([tmp_path / "empty"]) == []
+    with pytest.raises(InputError) as raised:
+        discover_some([tmp_path / "empty", tmp_path / "also"])
+    assert str(raised.value) == (
+        f"{tmp_path / 'empty'}, {tmp_path / 'also'}: no recording found "
+        "(rosbag2 folders, .mcap, .db3, .bag or .jsonl files)"
+    )
+    script = write_script(tmp_path / "also" / "run.jsonl", [report(1.0, "PUMP_FAIL")])
+    assert discover_some([tmp_path / "empty", tmp_path / "also"]) == [script]

@@ -167,7 +167,9 @@ def test_bad_usage_is_one_line_and_exit_2(
 def test_no_recording_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "empty").mkdir()
     assert main(["suggest-rules", str(tmp_path / "empty")]) == 2
-    assert "no recording found" in capsys.readouterr().err
+    assert "no recording found (rosbag2 folders, .mcap, .db3, .bag or .jsonl" in (
+        capsys.readouterr().err
+    )
 
 
 def test_rules_go_to_standard_output_without_out(
