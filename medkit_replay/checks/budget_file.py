@@ -220,33 +220,36 @@ def _limits(
     return tuple(limits)
 
 
-def _expect_confirmed(reader: _Reader, node: yaml.Node, where: str) -> ExpectConfirmed:
-    values = {
-        k: v for k, _, v in reader.mapping(node, where, allowed=("code", "between", "muted_by"))
-    }
+def _code_and_window(
+    reader: _Reader, node: yaml.Node, where: str, allowed: tuple[str, ...], code_is: str
+) -> tuple[dict[str, yaml.Node], Pattern, Window | None]:
+    """An expectation's keys, its required ``code`` pattern and its optional ``between``."""
+    values = {k: v for k, _, v in reader.mapping(node, where, allowed=allowed)}
     if "code" not in values:
-        raise reader.fail(node, f"{where}: 'code' (the fault-code pattern expected) is required")
+        raise reader.fail(node, f"{where}: 'code' ({code_is}) is required")
+    code = reader.pattern(values["code"], f"{where}.code")
+    between = values.get("between")
+    return values, code, reader.window(between, f"{where}.between") if between is not None else None
+
+
+def _expect_confirmed(reader: _Reader, node: yaml.Node, where: str) -> ExpectConfirmed:
+    allowed = ("code", "between", "muted_by")
+    values, code, between = _code_and_window(
+        reader, node, where, allowed, "the fault-code pattern expected"
+    )
+    muted_by = values.get("muted_by")
     return ExpectConfirmed(
-        code=reader.pattern(values["code"], f"{where}.code"),
-        between=reader.window(values["between"], f"{where}.between")
-        if "between" in values
-        else None,
-        muted_by=reader.pattern(values["muted_by"], f"{where}.muted_by")
-        if "muted_by" in values
-        else None,
+        code=code,
+        between=between,
+        muted_by=reader.pattern(muted_by, f"{where}.muted_by") if muted_by is not None else None,
     )
 
 
 def _expect_not_confirmed(reader: _Reader, node: yaml.Node, where: str) -> ExpectNotConfirmed:
-    values = {k: v for k, _, v in reader.mapping(node, where, allowed=("code", "between"))}
-    if "code" not in values:
-        raise reader.fail(node, f"{where}: 'code' (the fault-code pattern) is required")
-    return ExpectNotConfirmed(
-        code=reader.pattern(values["code"], f"{where}.code"),
-        between=reader.window(values["between"], f"{where}.between")
-        if "between" in values
-        else None,
+    _, code, between = _code_and_window(
+        reader, node, where, ("code", "between"), "the fault-code pattern"
     )
+    return ExpectNotConfirmed(code=code, between=between)
 
 
 def _expect_cluster(reader: _Reader, node: yaml.Node, where: str) -> ExpectCluster:

@@ -168,6 +168,14 @@ def _patterns(patterns: Iterable[Pattern]) -> str:
     return ", ".join(str(p) for p in patterns)
 
 
+def _held_unless(rule: Rule, offenders: list[Offender], broke: str, held: str) -> Verdict:
+    """Failed, with its offenders in time order and '<N faults> ``broke``', when any fault broke
+    the rule; else passed, saying ``held``."""
+    if offenders:
+        return Verdict(rule, False, f"{_faults(len(offenders))} {broke}", _sorted(offenders))
+    return Verdict(rule, True, held)
+
+
 def _sorted(offenders: Iterable[Offender]) -> tuple[Offender, ...]:
     return tuple(
         sorted(
@@ -218,10 +226,8 @@ def _never_confirm(rule: Rule, spec: NeverConfirm, facts: Facts) -> Verdict:
             if len(times) > 1:
                 detail = f"confirmed {len(times)} times ({pattern} must never confirm)"
             offenders.append(facts.offender(code, times[0], detail))
-    if offenders:
-        message = f"{_faults(len(offenders))} confirmed that must never confirm"
-        return Verdict(rule, False, message, _sorted(offenders))
-    return Verdict(rule, True, f"no fault matching {_patterns(spec.patterns)} confirmed")
+    held = f"no fault matching {_patterns(spec.patterns)} confirmed"
+    return _held_unless(rule, offenders, "confirmed that must never confirm", held)
 
 
 def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: Facts) -> Verdict:
@@ -235,10 +241,8 @@ def _allow_confirm(rule: Rule, spec: AllowConfirm, facts: Facts) -> Verdict:
         for code in confirmed
         if matches_any(code, spec.patterns) is None
     ]
-    if offenders:
-        message = f"{_faults(len(offenders))} confirmed that no allowed pattern matches"
-        return Verdict(rule, False, message, _sorted(offenders))
-    return Verdict(rule, True, f"{_faults(len(confirmed))} confirmed, all allowed")
+    held = f"{_faults(len(confirmed))} confirmed, all allowed"
+    return _held_unless(rule, offenders, "confirmed that no allowed pattern matches", held)
 
 
 def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: Facts) -> Verdict:
@@ -254,14 +258,12 @@ def _max_occurrences(rule: Rule, spec: MaxOccurrences, facts: Facts) -> Verdict:
                 offenders.append(facts.offender(code, fault.last_occurred_ns, detail))
             elif highest is None or count > highest[0]:
                 highest = (count, code)
-    if offenders:
-        message = f"{_faults(len(offenders))} occurred more often than allowed"
-        return Verdict(rule, False, message, _sorted(offenders))
-    if highest is None:
-        return Verdict(rule, True, "no fault matching the patterns was reported")
-    return Verdict(
-        rule, True, f"within limits; highest: {highest[1]} with {highest[0]} occurrence(s)"
+    held = (
+        "no fault matching the patterns was reported"
+        if highest is None
+        else f"within limits; highest: {highest[1]} with {highest[0]} occurrence(s)"
     )
+    return _held_unless(rule, offenders, "occurred more often than allowed", held)
 
 
 def _longest(facts: Facts, code: str) -> tuple[int, int, bool] | None:
@@ -294,13 +296,12 @@ def _max_duration(rule: Rule, spec: MaxConfirmedDuration, facts: Facts) -> Verdi
                 offenders.append(facts.offender(code, since, detail))
             elif longest_seen is None or length > longest_seen[0]:
                 longest_seen = (length, code)
-    if offenders:
-        message = f"{_faults(len(offenders))} stayed CONFIRMED longer than allowed"
-        return Verdict(rule, False, message, _sorted(offenders))
-    if longest_seen is None:
-        return Verdict(rule, True, "no fault matching the patterns confirmed")
-    code = longest_seen[1]
-    return Verdict(rule, True, f"within limits; longest: {code} for {seconds(longest_seen[0])} s")
+    held = (
+        "no fault matching the patterns confirmed"
+        if longest_seen is None
+        else f"within limits; longest: {longest_seen[1]} for {seconds(longest_seen[0])} s"
+    )
+    return _held_unless(rule, offenders, "stayed CONFIRMED longer than allowed", held)
 
 
 def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: Facts) -> Verdict:
@@ -316,12 +317,12 @@ def _resolved_by_end(rule: Rule, spec: ResolvedByEnd, facts: Facts) -> Verdict:
             last = facts.confirmations[code][-1]
             detail = f"confirmed, still {status} at the end"
             offenders.append(facts.offender(code, last, detail))
-    if offenders:
-        message = f"{_faults(len(offenders))} not healed or cleared by the end"
-        return Verdict(rule, False, message, _sorted(offenders))
-    if not checked:
-        return Verdict(rule, True, f"no fault matching {_patterns(spec.patterns)} confirmed")
-    return Verdict(rule, True, f"{_faults(checked)} confirmed, all healed or cleared by the end")
+    held = (
+        f"{_faults(checked)} confirmed, all healed or cleared by the end"
+        if checked
+        else f"no fault matching {_patterns(spec.patterns)} confirmed"
+    )
+    return _held_unless(rule, offenders, "not healed or cleared by the end", held)
 
 
 def _in_window(facts: Facts, t_ns: int, spec: ExpectConfirmed | ExpectNotConfirmed) -> bool:
