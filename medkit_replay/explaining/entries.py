@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
     from medkit_replay.model import NearMiss
     from medkit_replay.result import Result
-    from medkit_replay.trace import FaultTrace, RecordedMessage, TraceItem
+    from medkit_replay.trace import FaultTrace, RecordedMessage, RuleFacts, TraceItem
 
 MAX_REMEMBERED = 4096
 """Distinct recorded messages remembered, to say "the same as at" instead of repeating them."""
@@ -265,15 +265,9 @@ class EntryBuilder:
                 part(": upstream logs this fault as retroactively muted (a log line only)", "dim"),
             ]
         elif item.fault_code != self.code:
-            line += [
-                part("root of ", "plain"),
-                part(item.fault_code, "code"),
-                part(
-                    f" under {rule_text(rule)}, that report {item.delay_ms} ms after this fault: ",
-                    "dim",
-                ),
-                part("muted" if item.should_mute else "not muted", "muted"),
-            ]
+            when = f"that report {item.delay_ms} ms after this fault"
+            muted = "muted" if item.should_mute else "not muted"
+            line += _related("root of ", item.fault_code, rule, when, muted)
         elif item.is_root_cause:
             line += [
                 part("root cause", "plain"),
@@ -283,15 +277,9 @@ class EntryBuilder:
                 ),
             ]
         elif item.root_cause_code:
-            line += [
-                part("symptom of ", "plain"),
-                part(item.root_cause_code, "code"),
-                part(
-                    f" under {rule_text(rule)}, this report {item.delay_ms} ms after the root: ",
-                    "dim",
-                ),
-                part("muted" if item.should_mute else "not muted (mute_symptoms off)", "muted"),
-            ]
+            when = f"this report {item.delay_ms} ms after the root"
+            muted = "muted" if item.should_mute else "not muted (mute_symptoms off)"
+            line += _related("symptom of ", item.root_cause_code, rule, when, muted)
         elif item.cluster_id:
             line += [part("cluster ", "plain"), part(item.cluster_id, "cluster")]
             if rule is not None:
@@ -410,3 +398,16 @@ ENTRY_BUILDERS: dict[type, Callable[[EntryBuilder, TraceItem], None]] = {
 """How each kind of trace item joins the story. A later step (a freeze frame or a recording
 captured at a moment, say) joins by adding its item type to the trace (trace.py TraceItem),
 a method here that turns it into entries, and its kind to EntryKind."""
+
+
+def _related(
+    role: str, code: str, rule: RuleFacts | None, when: str, muted: str
+) -> list[tuple[str, str]]:
+    """A correlation line's words for a report tied to another code: its role (root of,
+    symptom of), the code, the rule and the delay, and whether it was muted."""
+    return [
+        part(role, "plain"),
+        part(code, "code"),
+        part(f" under {rule_text(rule)}, {when}: ", "dim"),
+        part(muted, "muted"),
+    ]
