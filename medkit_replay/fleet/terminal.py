@@ -54,9 +54,9 @@ def _indented(text: Text) -> Padding:
     return Padding(text, (0, 0, 0, 2))
 
 
-def _said(path: str, text: str) -> Flow:
-    """``path: text`` under two spaces, the path whole, the text broken only at spaces."""
-    pieces = [piece(printable(path) + ":", whole=True), piece(" " + printable(text))]
+def said(name: str, text: str) -> Flow:
+    """``name: text`` under two spaces, the name whole, the text broken only at spaces."""
+    pieces = [piece(printable(name) + ":", whole=True), piece(" " + printable(text))]
     return Flow(pieces, indent=2, hang=4)
 
 
@@ -131,7 +131,7 @@ def summary_renderables(
         parts.append(Text("over budget:", style="bold red"))
         for run in over[:MAX_ERROR_ROWS]:
             rules = "; ".join(run.budget_failures)
-            parts.append(_said(str(run.path), rules))
+            parts.append(said(str(run.path), rules))
         if len(over) > MAX_ERROR_ROWS:
             more = len(over) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -142,7 +142,7 @@ def summary_renderables(
         for run in failed[:MAX_ERROR_ROWS]:
             error = run.error or ""
             shown = error.removeprefix(run.path).removeprefix(":").strip()
-            parts.append(_said(str(run.path), shown))
+            parts.append(said(str(run.path), shown))
         if len(failed) > MAX_ERROR_ROWS:
             more = len(failed) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -163,8 +163,8 @@ def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
         for warning in run.first_warnings:
             if shown == MAX_WARNING_ROWS:
                 break
-            said = warning.removeprefix(run.path).removeprefix(":").strip()
-            parts.append(_said(str(run.path), said))
+            text = warning.removeprefix(run.path).removeprefix(":").strip()
+            parts.append(said(str(run.path), text))
             shown += 1
     if total > shown:
         within = sum(1 for run in runs if run.warnings)
