@@ -7,6 +7,7 @@ characters escaped); away from a terminal the summary is plain text at 80 column
 
 from __future__ import annotations
 
+from itertools import islice
 from typing import TYPE_CHECKING, TextIO
 
 from rich.console import Group
@@ -158,14 +159,12 @@ def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
     if not total:
         return []
     parts: list[RenderableType] = [Text(f"warnings: {total:,}", style="bold yellow")]
+    first = ((run.path, warning) for run in runs for warning in run.first_warnings)
     shown = 0
-    for run in runs:
-        for warning in run.first_warnings:
-            if shown == MAX_WARNING_ROWS:
-                break
-            text = warning.removeprefix(run.path).removeprefix(":").strip()
-            parts.append(said(str(run.path), text))
-            shown += 1
+    for path, warning in islice(first, MAX_WARNING_ROWS):
+        text = warning.removeprefix(path).removeprefix(":").strip()
+        parts.append(said(str(path), text))
+        shown += 1
     if total > shown:
         within = sum(1 for run in runs if run.warnings)
         parts.append(
