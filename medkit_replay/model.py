@@ -36,6 +36,12 @@ nothing; the command line checks them before the tailing input clamps to them.""
 POLL_DEFAULT_S = 0.5
 
 
+LOG_LEVELS: dict[int, str] = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
+"""rcl_interfaces/msg/Log's severity levels by number."""
+LOG_LEVEL_WARN = 30
+"""A log line's WARN level: the log bridge's default severity floor."""
+
+
 class Severity(IntEnum):
     """Fault severities with ros2_medkit_msgs/Fault's numbers."""
 

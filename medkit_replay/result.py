@@ -73,10 +73,6 @@ _FED = ("diagnostic_bridge", "action_status_bridge", "log_bridge", "script")
 """Paths into the fault manager fed by messages (recorded calls count by call, not message)."""
 
 
-_LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
-"""rcl_interfaces/msg/Log levels by number."""
-
-
 def _count(number: int, word: str) -> str:
     return f"{number:,} {word}" + ("" if number == 1 else "s")
 
@@ -129,7 +125,7 @@ class Consumption:
     clear_calls: int = 0
     metadata_only: int = 0
     unread: tuple[TopicUse, ...] = ()
-    log_floor: int = 30
+    log_floor: int = model.LOG_LEVEL_WARN
     """The lowest log level the log bridge reports (``log_bridge.severity_floor``; WARN)."""
 
     def topics(self, origin: str) -> tuple[TopicUse, ...]:
@@ -212,13 +208,14 @@ class Consumption:
         if self.empty:
             return self.nothing_replayed()
         seen: list[str] = []
+        floor = model.LOG_LEVELS.get(self.log_floor, str(self.log_floor))
         for origin, what, verdict in (
             ("diagnostic_bridge", "DiagnosticArray", "none reported"),
             ("action_status_bridge", "action status message", "no goal aborted"),
             (
                 "log_bridge",
                 "log line",
-                f"none at {_LEVELS.get(self.log_floor, str(self.log_floor))} or above reported",
+                f"none at {floor} or above reported",
             ),
         ):
             uses = self.topics(origin)

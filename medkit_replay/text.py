@@ -77,3 +77,9 @@ def closest(name: str, known: Sequence[str], cutoff: float = 0.6) -> str | None:
     folded = [k for k in known if k.lower() == name.lower()]
     close = folded or difflib.get_close_matches(name, known, n=1, cutoff=cutoff)
     return close[0] if close else None
+
+
+def name_hint(meant: str | None, known: Sequence[str]) -> str:
+    """The hint after an unknown name: ``did you mean 'x'?`` for the ``meant`` name (as
+    :func:`closest` found it), else the ``known`` names."""
+    return f"did you mean '{meant}'?" if meant else f"expected one of: {', '.join(known)}"

@@ -16,7 +16,7 @@ from medkit_replay.bridges.base import (
 )
 from medkit_replay.bridges.codes import log_fault_code
 from medkit_replay.engine.local_filter import LocalFilterConfig
-from medkit_replay.model import NS_PER_SEC, Severity
+from medkit_replay.model import LOG_LEVEL_WARN, NS_PER_SEC, Severity
 
 if TYPE_CHECKING:
     from medkit_replay.model import Origin, ReportSink
@@ -24,7 +24,6 @@ if TYPE_CHECKING:
 NODE_NAME = "log_bridge"
 LOG_TYPE = "rcl_interfaces/msg/Log"
 LEVEL_INFO = 20
-LEVEL_WARN = 30
 LEVEL_ERROR = 40
 LEVEL_FATAL = 50
 MEDKIT_STACK_LOGGERS = (
@@ -49,7 +48,7 @@ class LogBridgeConfig:
     """The node's parameters after upstream's load-time checks (bridges.md §3.3)."""
 
     rosout_topic: str = "/rosout"
-    severity_floor: int = LEVEL_WARN
+    severity_floor: int = LOG_LEVEL_WARN
     code_prefix: str = "LOG"
     exclude_nodes: tuple[str, ...] = ()
     include_only_nodes: tuple[str, ...] = ()
@@ -80,7 +79,7 @@ def map_level_to_severity(level: int, severity_floor: int) -> int | None:
     """
     if level < severity_floor or level <= LEVEL_INFO:
         return None
-    if level == LEVEL_WARN:
+    if level == LOG_LEVEL_WARN:
         return int(Severity.WARN)
     if level == LEVEL_FATAL:
         return int(Severity.CRITICAL)

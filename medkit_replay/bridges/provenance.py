@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from medkit_replay.bridges.action_status import uuid_to_hex
+from medkit_replay.model import LOG_LEVELS
 from medkit_replay.trace import MAX_ITEMS, RecordedMessage
 
 if TYPE_CHECKING:
@@ -25,7 +26,6 @@ GOAL_STATUSES = {
     5: "CANCELED",
     6: "ABORTED",
 }
-LOG_LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
 SERVICE_EVENT_TYPES = {
     0: "REQUEST_SENT",
     1: "REQUEST_RECEIVED",

@@ -37,7 +37,7 @@ from medkit_replay.checks.budget import (
 )
 from medkit_replay.errors import ConfigError
 from medkit_replay.files import read_limited
-from medkit_replay.text import closest
+from medkit_replay.text import closest, name_hint
 from medkit_replay.yaml_bounds import (
     compose_config,
     shown_text,
@@ -149,9 +149,8 @@ class _Reader:
             if key in seen:
                 raise self.fail(key_node, f"{where}: duplicate key '{shown_text(key)}'")
             if allowed is not None and key not in allowed:
-                raise self.fail(
-                    key_node, f"{where}: unknown key '{shown_text(key)}'{_suggest(key, allowed)}"
-                )
+                hint = name_hint(closest(key, allowed), allowed)
+                raise self.fail(key_node, f"{where}: unknown key '{shown_text(key)}' ({hint})")
             seen.add(key)
             items.append((key, key_node, value_node))
         return items
@@ -186,13 +185,6 @@ def _kind(node: yaml.Node) -> str:
     text = shown_text(str(node.value), limit=_SHOWN)
     shown = f"'{text}'" if node.tag == _STR else text  # as written
     return f"{names.get(node.tag, 'a value')} ({shown})"
-
-
-def _suggest(key: str, allowed: Sequence[str]) -> str:
-    close = closest(key, allowed)
-    if close:
-        return f" (did you mean '{close}'?)"
-    return f" (expected one of: {', '.join(allowed)})"
 
 
 def _max_confirmed(reader: _Reader, node: yaml.Node, where: str) -> MaxConfirmed:

@@ -19,13 +19,12 @@ from medkit_replay.bridges.diagnostic import (
 from medkit_replay.bridges.log import (
     DEFAULT_COOLDOWN_SEC,
     LEVEL_FATAL,
-    LEVEL_WARN,
     NODE_NAME as LOG_NODE,
     LogBridgeConfig,
 )
 from medkit_replay.config.reader import INT32_MAX, ParameterReader, to_int32
 from medkit_replay.errors import ConfigError
-from medkit_replay.model import NS_PER_SEC
+from medkit_replay.model import LOG_LEVEL_WARN, NS_PER_SEC
 from medkit_replay.releases import Release, default_release
 
 if TYPE_CHECKING:
@@ -150,7 +149,7 @@ def log_bridge_config(
     release = release or default_release()
     read = ParameterReader(LOG_NODE, params)
     topic = read.string("rosout_topic", "/rosout")
-    floor = _integer(read, release, "severity_floor", LEVEL_WARN)
+    floor = _integer(read, release, "severity_floor", LOG_LEVEL_WARN)
     if not 0 <= floor <= LEVEL_FATAL:
         floor = read.replaced(
             "severity_floor",

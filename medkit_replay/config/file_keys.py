@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from yaml.nodes import MappingNode, ScalarNode
 
 from medkit_replay.errors import ConfigWarning
-from medkit_replay.text import closest
+from medkit_replay.text import closest, name_hint
 from medkit_replay.yaml_bounds import shown_text
 
 if TYPE_CHECKING:
@@ -34,7 +34,7 @@ def unknown_map_keys(
         key = str(key_node.value)
         line = None if key_node.start_mark is None else key_node.start_mark.line + 1
         meant = closest(key, known)
-        hint = f"did you mean '{meant}'?" if meant else f"expected one of: {', '.join(known)}"
+        hint = name_hint(meant, known)
         found.append(
             ConfigWarning(
                 f"{where}: unknown key '{shown_text(key)}' ({hint}); upstream ignores it",

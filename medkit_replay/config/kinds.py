@@ -46,7 +46,8 @@ DESCRIBED: Final[dict[Kind, str]] = {
 # snapshots.py, checks/budget_file.py, evidence/graph.py).
 _ENTITY_FIELDS = frozenset({"confirmation_threshold", "healing_enabled", "healing_threshold"})
 _SNAPSHOT_KEYS = frozenset({"fault_specific", "patterns", "default_topics"})
-_BUDGET_KEYS = frozenset({"version", "name", "rules"})
+# A budget's own top-level keys; its third, name, tells nothing.
+_BUDGET_KEYS = frozenset({"version", "rules"})
 _GRAPH_KEYS = frozenset(PUBLISHED_KEYS + SUBSCRIBED_KEYS)
 
 
@@ -82,7 +83,7 @@ def guess_kind(data: object) -> Kind | None:
     if isinstance(data.get("correlation"), dict):
         return "correlation"
     # One known top-level key is enough: a misspelt neighbour is then its reader's to name.
-    if keys & {"version", "rules"}:
+    if keys & _BUDGET_KEYS:
         return "budget"
     if keys & _SNAPSHOT_KEYS:
         return "snapshots"

@@ -216,11 +216,6 @@ class Section:
         return self.key.rstrip("/").rsplit("/", 1)[-1]
 
 
-def load_parameter_file(path: Path) -> list[tuple[str, NodeParams]]:
-    """Parse one ROS 2 parameter file into (node key, flat parameters) in file order."""
-    return [(section.key, section.params) for section in load_sections(path)]
-
-
 def load_sections(path: Path) -> list[Section]:
     """Parse one ROS 2 parameter file into its node sections, in file order."""
     try:

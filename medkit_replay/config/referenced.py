@@ -16,12 +16,15 @@ from medkit_replay.config.replay_options import replay_options
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-# fault_manager parameters whose value is a file, resolved beside the file that sets them.
-FILE_PARAMETERS = (
-    "correlation.config_file",
-    "entity_thresholds.config_file",
-    "snapshots.config_file",
-)
+    from medkit_replay.config.kinds import Kind
+
+FILE_PARAMETERS: dict[str, Kind] = {
+    "correlation.config_file": "correlation",
+    "entity_thresholds.config_file": "entity_thresholds",
+    "snapshots.config_file": "snapshots",
+}
+"""fault_manager's parameters whose value is a file (resolved beside the file that sets them),
+each with the kind of file it names."""
 
 
 def config_files(configs: Iterable[str | Path], *, check: bool = True) -> list[Path]:

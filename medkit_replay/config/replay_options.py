@@ -19,7 +19,7 @@ from medkit_replay.config.bridges import (
 from medkit_replay.config.nodes import located, located_warnings, values
 from medkit_replay.config.reader import ParameterReader
 from medkit_replay.config.unknown_keys import unknown_keys
-from medkit_replay.errors import ConfigError, ConfigWarning
+from medkit_replay.errors import ConfigError
 from medkit_replay.releases import Release, default_release
 
 if TYPE_CHECKING:
@@ -54,10 +54,7 @@ def replay_options(
     """Read ``medkit_replay`` and the three bridge nodes from the merged parameter files, for
     ``release`` (the newest when None); the warnings start with the names upstream ignores."""
     release = release or default_release()
-    warnings: list[str] = [
-        ConfigWarning(u.problem, path=str(u.path), line=u.line, suggestion=u.suggestion)
-        for u in unknown_keys(params, release)
-    ]
+    warnings: list[str] = list(unknown_keys(params, release))
     own = params.node("medkit_replay")
 
     def read_own() -> tuple[bool, dict[str, str]]:

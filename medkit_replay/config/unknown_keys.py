@@ -6,12 +6,12 @@ Warnings only: upstream ignores both, and so does the replay.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING
 
 from medkit_replay.config.declared import DECLARED
 from medkit_replay.config.params import KNOWN_NODES
+from medkit_replay.errors import ConfigWarning
 from medkit_replay.releases import RELEASES
 from medkit_replay.text import closest
 from medkit_replay.yaml_bounds import shown_text
@@ -29,19 +29,6 @@ NODE_CUTOFF = 0.8
 REPLAY_NODE = "medkit_replay"
 MAX_LISTED = 100
 """Ignored names listed one by one; any more are counted in one last warning."""
-
-
-@dataclass(frozen=True, slots=True)
-class UnknownKey:
-    """One name upstream ignores, where it is written, and the closest known name."""
-
-    path: Path
-    line: int
-    problem: str
-    suggestion: str | None
-
-    def __str__(self) -> str:
-        return f"{self.path}:{self.line}: {self.problem}"
 
 
 def declares(node: str, name: str, release: str) -> bool:
@@ -92,19 +79,20 @@ def _plain(names: frozenset[str]) -> list[str]:
     return sorted(n for n in names if not n.endswith(".*"))
 
 
-def unknown_keys(params: ParameterSet, release: Release) -> list[UnknownKey]:
+def unknown_keys(params: ParameterSet, release: Release) -> list[ConfigWarning]:
     """Every ignored name in the parameter files, in file order; past ``MAX_LISTED`` of them,
     one more saying how many others there are.
 
     Only sections naming a node outright are looked at: a wildcard section (``/**``) is for
     every node of a robot, and a node name far from the modelled ones is another node's.
     """
-    found: list[UnknownKey] = []
+    found: list[ConfigWarning] = []
     more: list[tuple[Path, int]] = []
 
     def add(path: Path, line: int, why: Callable[[], tuple[str, str | None]]) -> None:
         if len(found) < MAX_LISTED:
-            found.append(UnknownKey(path, line, *why()))
+            problem, suggestion = why()
+            found.append(ConfigWarning(problem, path=str(path), line=line, suggestion=suggestion))
         else:  # only counted: finding the closest name for each costs time
             more.append((path, line))
 
@@ -125,5 +113,6 @@ def unknown_keys(params: ParameterSet, release: Release) -> list[UnknownKey]:
             f"{len(more):,} more names upstream ignores from here on "
             f"(the first {MAX_LISTED} are listed)"
         )
-        found.append(UnknownKey(*more[0], problem, None))
+        path, line = more[0]
+        found.append(ConfigWarning(problem, path=str(path), line=line))
     return found

@@ -35,13 +35,6 @@ if TYPE_CHECKING:
 
 Severity = Literal["error", "warning", "info"]
 
-NAMED_KINDS: dict[str, Kind] = {
-    "correlation.config_file": "correlation",
-    "entity_thresholds.config_file": "entity_thresholds",
-    "snapshots.config_file": "snapshots",
-}
-"""The kind of file each of fault_manager's file parameters (FILE_PARAMETERS) names."""
-
 
 @dataclass(frozen=True, slots=True)
 class Finding:
@@ -111,10 +104,9 @@ def parameter_findings(path: Path, release: Release | None = None) -> list[Findi
     found = [said_kind(path, "parameters", f" (release {chosen.name})")]
     named = params.node("fault_manager")
     kinds: dict[str, Kind] = {}
-    for name in FILE_PARAMETERS:  # the files it names, beside it
+    for name, kind in FILE_PARAMETERS.items():  # the files it names, beside it
         param = named.get(name)
         if param is not None and isinstance(param.value, str) and param.value:
-            kind = NAMED_KINDS[name]
             referenced = str(param.path.parent / param.value)
             kinds[referenced] = kind
             found.append(said_kind(Path(referenced), kind, f" (named by {path}:{param.line})"))

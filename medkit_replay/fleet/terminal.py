@@ -7,6 +7,7 @@ characters escaped); away from a terminal the summary is plain text at 80 column
 
 from __future__ import annotations
 
+from itertools import islice
 from typing import TYPE_CHECKING, TextIO
 
 from rich.console import Group
@@ -54,9 +55,9 @@ def _indented(text: Text) -> Padding:
     return Padding(text, (0, 0, 0, 2))
 
 
-def _said(path: str, text: str) -> Flow:
-    """``path: text`` under two spaces, the path whole, the text broken only at spaces."""
-    pieces = [piece(printable(path) + ":", whole=True), piece(" " + printable(text))]
+def said(name: str, text: str) -> Flow:
+    """``name: text`` under two spaces, the name whole, the text broken only at spaces."""
+    pieces = [piece(printable(name) + ":", whole=True), piece(" " + printable(text))]
     return Flow(pieces, indent=2, hang=4)
 
 
@@ -131,7 +132,7 @@ def summary_renderables(
         parts.append(Text("over budget:", style="bold red"))
         for run in over[:MAX_ERROR_ROWS]:
             rules = "; ".join(run.budget_failures)
-            parts.append(_said(str(run.path), rules))
+            parts.append(said(str(run.path), rules))
         if len(over) > MAX_ERROR_ROWS:
             more = len(over) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -142,7 +143,7 @@ def summary_renderables(
         for run in failed[:MAX_ERROR_ROWS]:
             error = run.error or ""
             shown = error.removeprefix(run.path).removeprefix(":").strip()
-            parts.append(_said(str(run.path), shown))
+            parts.append(said(str(run.path), shown))
         if len(failed) > MAX_ERROR_ROWS:
             more = len(failed) - MAX_ERROR_ROWS
             parts.append(_indented(Text(f"... {more:,} more in runs.csv", style="dim")))
@@ -158,14 +159,12 @@ def _warnings(runs: Sequence[RunSummary]) -> list[RenderableType]:
     if not total:
         return []
     parts: list[RenderableType] = [Text(f"warnings: {total:,}", style="bold yellow")]
+    first = ((run.path, warning) for run in runs for warning in run.first_warnings)
     shown = 0
-    for run in runs:
-        for warning in run.first_warnings:
-            if shown == MAX_WARNING_ROWS:
-                break
-            said = warning.removeprefix(run.path).removeprefix(":").strip()
-            parts.append(_said(str(run.path), said))
-            shown += 1
+    for path, warning in islice(first, MAX_WARNING_ROWS):
+        text = warning.removeprefix(path).removeprefix(":").strip()
+        parts.append(said(str(path), text))
+        shown += 1
     if total > shown:
         within = sum(1 for run in runs if run.warnings)
         parts.append(

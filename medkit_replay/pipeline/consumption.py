@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from medkit_replay.inputs.selection import DIAGNOSTICS_TYPE, LOG_TYPE
+from medkit_replay.model import LOG_LEVEL_WARN
 from medkit_replay.result import Consumption, TopicUse
 
 if TYPE_CHECKING:
@@ -75,7 +76,7 @@ def consumption(
         clear_calls=calls.get("clear", 0),
         metadata_only=sum(router.services.metadata_only.values()),
         unread=_unread(router, summaries, rosout),
-        log_floor=router.log.config.severity_floor if router.log is not None else 30,
+        log_floor=router.log.config.severity_floor if router.log is not None else LOG_LEVEL_WARN,
     )
 
 

@@ -291,17 +291,21 @@ def check_names(base: ParameterSet, varies: Sequence[Vary], grid: Sequence[Varia
 def _undeclared(base: ParameterSet, vary: Vary, grid: Sequence[Variant]) -> str | None:
     """Why upstream ignores a varied name at the first variant's release, when it is declared
     at none of the variants' releases (config/declared.py); None otherwise."""
-    problems: list[str] = []
+    first: str | None = None
+    checked: set[str] = set()
     for variant in grid:
         try:
             release = release_of(variant_parameters(base, variant.settings))
         except ConfigError:  # a bad release is said by the variant's own check
             return None
+        if release.name in checked:
+            continue
+        checked.add(release.name)
         why = undeclared(vary.node, vary.name, release)
         if why is None:
             return None
-        problems.append(why[0])
-    return problems[0] if problems else None
+        first = first or why[0]
+    return first
 
 
 def yaml_value(value: ParamValue) -> str:

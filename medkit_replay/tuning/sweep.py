@@ -59,7 +59,8 @@ class Grid:
 
 
 def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
-    """Build the grid and read every variant's config as its replays will.
+    """Build the grid and read every variant's config as its replays will. A warning every
+    variant gives (one about a base config) is kept once; the others after their variant's id.
 
     Raises:
         ConfigError: a bad name or value (naming its ``--vary``), or a bad base config.
@@ -67,13 +68,16 @@ def checked_grid(configs: Sequence[Path], varies: Sequence[Vary]) -> Grid:
     base = load_parameters(configs)
     variants = make_grid(varies)
     check_names(base, varies, variants)
-    warnings: list[str] = []
+    said: list[tuple[str, ...]] = []
     releases: dict[str, str] = {}
     for variant in variants:
         config = variant_config(base, variant)
         releases[variant.id] = config.manager.release.name
-        for warning in config.warnings:
-            warnings.append(f"{variant.id}: {warning}")
+        said.append(config.warnings)
+    shared = set(said[0]).intersection(*said[1:])
+    warnings = [w for w in said[0] if w in shared]
+    for variant, own in zip(variants, said, strict=True):
+        warnings += [f"{variant.id}: {w}" for w in own if w not in shared]
     return Grid(tuple(varies), tuple(variants), tuple(dict.fromkeys(warnings)), releases)
 
 

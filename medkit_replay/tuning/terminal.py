@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, TextIO
 from rich.console import Group
 from rich.text import Text
 
+from medkit_replay.fleet.terminal import said
 from medkit_replay.outputs.console import draw, literal_console
 from medkit_replay.outputs.summary_lines import Cell, Flow, Rows, cell, piece
 from medkit_replay.result import release_line
@@ -30,12 +31,6 @@ if TYPE_CHECKING:
 MAX_VARIANT_ROWS = 30
 """Variants listed on the terminal; variants.csv has all of them."""
 MAX_ERROR_ROWS = 10
-
-
-def _said(name: str, text: str) -> Flow:
-    """``name: text`` under two spaces, the name whole, the text broken only at spaces."""
-    pieces = [piece(printable(name) + ":", whole=True), piece(" " + printable(text))]
-    return Flow(pieces, indent=2, hang=4)
 
 
 def _seconds(ns: int | None) -> str:
@@ -101,14 +96,14 @@ def summary_renderables(
         parts.append(Text("over budget:", style="bold red"))
         for path, why, variants in over_budget[:MAX_ERROR_ROWS]:
             shown = f"{why} ({variants:,} variant{'' if variants == 1 else 's'})"
-            parts.append(_said(path, shown))
+            parts.append(said(path, shown))
         if len(over_budget) > MAX_ERROR_ROWS:
             more = len(over_budget) - MAX_ERROR_ROWS
             parts.append(Text(f"  ... {more:,} more in runs.csv"))
     if failed:
         parts.append(Text("not replayed:", style="bold red"))
         for failure in failed[:MAX_ERROR_ROWS]:
-            parts.append(_said(failure.variant, str(failure.error)))
+            parts.append(said(failure.variant, str(failure.error)))
         if len(failed) > MAX_ERROR_ROWS:
             parts.append(Text(f"  ... {len(failed) - MAX_ERROR_ROWS:,} more in runs.csv"))
     if out_dir is not None:

@@ -18,7 +18,8 @@ from medkit_replay.bridges.log import (
 )
 from medkit_replay.config.bridges import log_bridge_config
 from medkit_replay.errors import ConfigError
-from medkit_replay.model import NS_PER_SEC, EventType, ReportRequest
+from medkit_replay.model import LOG_LEVEL_WARN, LOG_LEVELS, NS_PER_SEC, EventType, ReportRequest
+from medkit_replay.result import Consumption, TopicUse
 from tests.bridges.messages import LOG, log
 
 if TYPE_CHECKING:
@@ -419,3 +420,19 @@ def test_max_tracked_nodes_upper_clamp_and_prefix_fallback() -> None:
 def test_wrong_parameter_types_stop_the_node(name: str, value: object) -> None:
     with pytest.raises(ConfigError, match=f"'{name}'"):
         log_bridge_config({name: value})
+
+
+def test_the_default_floor_is_warn_for_the_bridge_its_config_and_the_no_report_line() -> None:
+    assert LOG_LEVELS[LOG_LEVEL_WARN] == "WARN"
+    assert LogBridgeConfig().severity_floor == LOG_LEVEL_WARN
+    assert log_bridge_config({})[0].severity_floor == LOG_LEVEL_WARN
+    took = {
+        "messages_read": 3,
+        "holds_messages": True,
+        "diagnostics_topic": "/diagnostics",
+        "rosout_topic": "/rosout",
+        "log_bridge": True,
+        "taken": (TopicUse("log_bridge", "/rosout", 3),),
+    }
+    assert "none at WARN or above reported" in Consumption(**took).no_report()
+    assert "none at ERROR or above" in Consumption(**took, log_floor=40).no_report()

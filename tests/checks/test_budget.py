@@ -252,6 +252,7 @@ BAD: list[tuple[str, int | None, str, bool]] = [
     ("- expect_cluster: {rule: a, cluster: b}", 3, "give exactly one of 'rule'", True),
     ("- expect_cluster: {}", 3, "give exactly one of 'rule'", True),
     ("- expect_cluster: {rules: a}", 3, "unknown key 'rules' (did you mean 'rule'?)", True),
+    ("- expect_cluster: {x: a}", 3, "unknown key 'x' (expected one of: rule, cluster)", True),
 ]
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -13,15 +14,18 @@ from medkit_replay.config.declared import DECLARED, ROS_PARAMETERS
 from medkit_replay.config.params import KNOWN_NODES, load_parameters
 from medkit_replay.config.release import release_of
 from medkit_replay.config.replay_options import replay_options
-from medkit_replay.config.unknown_keys import MAX_LISTED, UnknownKey, unknown_keys
+from medkit_replay.config.unknown_keys import MAX_LISTED, unknown_keys
 from medkit_replay.releases import RELEASES, release_named
 from tests.config import declared_upstream
+
+if TYPE_CHECKING:
+    from medkit_replay.errors import ConfigWarning
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "nav2_mission.jsonl"
 
 
-def found(tmp_path: Path, text: str, release: str = "0.7.0") -> list[UnknownKey]:
+def found(tmp_path: Path, text: str, release: str = "0.7.0") -> list[ConfigWarning]:
     path = tmp_path / "params.yaml"
     path.write_text(text)
     return unknown_keys(load_parameters([path]), release_named(release))
@@ -82,7 +86,7 @@ def test_a_typo_in_a_parameter_names_the_release_and_the_name_meant(
 
 def test_a_name_near_nothing_is_warned_without_a_suggestion(tmp_path: Path) -> None:
     (unknown,) = found(tmp_path, "action_status_bridge:\n  ros__parameters:\n    zzz: 1\n")
-    assert unknown.problem == (
+    assert unknown.message == (
         "action_status_bridge has no parameter 'zzz' at ros2_medkit 0.7.0; upstream ignores it"
     )
     assert unknown.suggestion is None
@@ -161,8 +165,8 @@ def test_layered_files_are_each_warned_where_written(tmp_path: Path) -> None:
     )
     params = load_parameters([first, second])
     assert [(k.path, k.line) for k in unknown_keys(params, release_of(params))] == [
-        (first, 3),
-        (second, 4),
+        (str(first), 3),
+        (str(second), 4),
     ]
 
 
@@ -236,7 +240,7 @@ def test_past_the_first_hundred_the_rest_are_counted(tmp_path: Path) -> None:
     names = "".join(f"    thresh_{n:04d}: 1\n" for n in range(MAX_LISTED + 250))
     listed = found(tmp_path, f"fault_manager:\n  ros__parameters:\n{names}")
     assert len(listed) == MAX_LISTED + 1
-    assert listed[MAX_LISTED - 1].problem.startswith("fault_manager has no parameter 'thresh_0099'")
+    assert listed[MAX_LISTED - 1].message.startswith("fault_manager has no parameter 'thresh_0099'")
     assert str(listed[-1]) == (
         f"{tmp_path / 'params.yaml'}:{MAX_LISTED + 3}: 250 more names upstream ignores from "
         f"here on (the first {MAX_LISTED} are listed)"

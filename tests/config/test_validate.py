@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from medkit_replay.cli import main
+from medkit_replay.config.referenced import FILE_PARAMETERS
 from medkit_replay.config.validation import Finding, warning_findings
 from medkit_replay.errors import ConfigWarning
 
@@ -366,3 +367,8 @@ def test_keys_of_a_disabled_correlation_file_are_warned_whatever_it_holds(
 def test_an_empty_file_is_a_warning(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = write(tmp_path, "empty.yaml", "# nothing yet\n")
     assert run(capsys, path)[:2] == (1, f"{path}: warning: empty: it sets nothing\n")
+
+
+def test_each_file_parameter_names_the_kind_of_file_it_holds() -> None:
+    assert set(FILE_PARAMETERS.values()) <= set(KINDS)
+    assert all(name == f"{kind}.config_file" for name, kind in FILE_PARAMETERS.items())

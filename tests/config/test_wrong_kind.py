@@ -56,6 +56,11 @@ def test_one_known_key_is_enough_beside_a_typo(text: str, kind: str) -> None:
     assert guess_kind(yaml.safe_load(text)) == kind
 
 
+def test_a_name_alone_does_not_make_a_budget() -> None:
+    """``name:`` is a budget key, but many files could have one: it tells no kind."""
+    assert guess_kind({"name": "ci"}) is None
+
+
 @pytest.mark.parametrize(("name", "kind"), SHIPPED.items())
 def test_the_shipped_files_are_told_apart(name: str, kind: str) -> None:
     assert guess_text_kind((ROOT / name).read_text(), name) == kind

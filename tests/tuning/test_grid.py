@@ -7,7 +7,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from medkit_replay.config.params import load_parameters
+from medkit_replay.config.unknown_keys import undeclared
 from medkit_replay.errors import ConfigError
+from medkit_replay.tuning import grid
 from medkit_replay.tuning.grid import (
     check_names,
     make_grid,
@@ -19,6 +21,8 @@ from medkit_replay.tuning.grid import (
 
 if TYPE_CHECKING:
     from pathlib import Path
+
+    from medkit_replay.releases import Release
 
 
 def test_values_split_on_commas_outside_brackets_and_quotes() -> None:
@@ -92,6 +96,25 @@ def test_an_unread_name_is_refused(tmp_path: Path) -> None:
     varies = [parse_vary("fault_manager.database_path=/tmp/faults.db")]
     with pytest.raises(ConfigError, match="fault_manager reads no parameter 'database_path'"):
         check_names(base, varies, make_grid(varies))
+
+
+def test_an_undeclared_name_is_looked_up_once_per_release(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    looked: list[str] = []
+
+    def counted(node: str, name: str, release: Release) -> tuple[str, str | None] | None:
+        looked.append(release.name)
+        return undeclared(node, name, release)
+
+    monkeypatch.setattr(grid, "undeclared", counted)
+    varies = [
+        parse_vary("fault_manager.healing_treshold=1,2"),
+        parse_vary("medkit_replay.upstream_release=0.6.0,0.7.0"),
+    ]
+    with pytest.raises(ConfigError, match=r"'healing_treshold' at ros2_medkit 0\.6\.0"):
+        check_names(load_parameters([]), varies, make_grid(varies))
+    assert looked == ["0.6.0", "0.7.0"]
 
 
 def test_a_typo_in_a_varied_node_is_refused_with_the_node_meant() -> None:

@@ -92,6 +92,26 @@ def test_the_summary_ranks_fewest_flaps_first_among_equal_detections(
     assert "Ranked by" in out.replace("\n", " ")
 
 
+def test_a_base_config_warning_is_printed_once_and_a_variant_one_per_variant(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = flapping(tmp_path / "wifi.jsonl")
+    base = tmp_path / "base.yaml"
+    base.write_text("fault_manager:\n  ros__parameters:\n    healing_treshold: 2\n")
+    argv = ["sweep", str(script), "--config", str(base), "--jobs", "1", "--quiet"]
+    varies = ["--vary", "fault_manager.healing_threshold=1,2"]
+    varies += ["--vary", "fault_manager.confirmation_threshold=-1,2"]
+    status, _, err = run([*argv, *varies], capsys)
+    assert status == 0
+    typo = [line for line in err.splitlines() if "healing_treshold" in line]
+    assert typo == [
+        f"medkit-replay: warning: {base}:3: fault_manager has no parameter 'healing_treshold' "
+        "at ros2_medkit 0.7.0 (did you mean 'healing_threshold'?); upstream ignores it"
+    ]
+    positive = [line for line in err.splitlines() if "is positive" in line]
+    assert [line.split()[2] for line in positive] == ["v02:", "v04:"]
+
+
 def test_tables_are_byte_identical_whatever_the_workers(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
