@@ -77,3 +77,13 @@ def closest(name: str, known: Sequence[str], cutoff: float = 0.6) -> str | None:
     folded = [k for k in known if k.lower() == name.lower()]
     close = folded or difflib.get_close_matches(name, known, n=1, cutoff=cutoff)
     return close[0] if close else None
+
+
+def one_line(exc: BaseException | str, limit: int | None = None, *, or_name: bool = False) -> str:
+    """An exception's text (or a text) on one line: every run of whitespace, line breaks
+    included, becomes one space; cut to ``limit`` characters when given. With ``or_name``, an
+    exception without text is shown by its type's name (``TimeoutError``)."""
+    text = " ".join(str(exc).split())[:limit]
+    if not text and or_name and isinstance(exc, BaseException):
+        return type(exc).__name__
+    return text
