@@ -83,3 +83,13 @@ def name_hint(meant: str | None, known: Sequence[str]) -> str:
     """The hint after an unknown name: ``did you mean 'x'?`` for the ``meant`` name (as
     :func:`closest` found it), else the ``known`` names."""
     return f"did you mean '{meant}'?" if meant else f"expected one of: {', '.join(known)}"
+
+
+def one_line(exc: BaseException | str, limit: int | None = None, *, or_name: bool = False) -> str:
+    """An exception's text (or a text) on one line: every run of whitespace, line breaks
+    included, becomes one space; cut to ``limit`` characters when given. With ``or_name``, an
+    exception without text is shown by its type's name (``TimeoutError``)."""
+    text = " ".join(str(exc).split())[:limit]
+    if not text and or_name and isinstance(exc, BaseException):
+        return type(exc).__name__
+    return text

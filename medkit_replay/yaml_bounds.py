@@ -14,6 +14,7 @@ from yaml.nodes import MappingNode, Node, SequenceNode
 from yaml.reader import Reader, ReaderError
 
 from medkit_replay.errors import ConfigError
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -134,7 +135,7 @@ def describe_yaml_error(
             line = text.count(b"\n", 0, error.position) + 1
     else:
         problem = str(error)
-    return shown_text(" ".join(str(problem).split()), limit=300), line
+    return shown_text(one_line(problem), limit=300), line
 
 
 # Line and paragraph separators, and the bidirectional marks, embeddings and isolates.

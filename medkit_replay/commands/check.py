@@ -28,6 +28,7 @@ from medkit_replay.commands import (
 from medkit_replay.commands.streams import standard_output
 from medkit_replay.errors import ConfigError, InputError, MedkitReplayError
 from medkit_replay.files import FileRefusedError, check_regular
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from medkit_replay.checks.budget import Budget
@@ -162,7 +163,7 @@ def _check_group(
     except FileRefusedError as err:
         error = f"{path}: {err}"
     except Exception as err:  # whatever the recording makes the replay raise: it failed
-        text = " ".join(str(err).split())
+        text = one_line(err)
         error = f"{' + '.join(labels)}: {type(err).__name__}" + (f": {text}" if text else "")
     return unreadable_run(budget, labels, " ".join(error.split()), release)
 

@@ -21,6 +21,7 @@ from medkit_replay.files import (
     report_limit_text,
 )
 from medkit_replay.jsonio import JsonRefusedError, loads_strict, locate_refusal
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -213,4 +214,4 @@ def _expand(
 
 
 def _why(err: BaseException) -> str:
-    return " ".join(str(err).split()) or type(err).__name__
+    return one_line(err, or_name=True)

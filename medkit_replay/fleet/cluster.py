@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, TypeVar, cast
 from medkit_replay.errors import MedkitReplayError
 from medkit_replay.fleet.run import RunSummary, describe_error, run_kind, run_one
 from medkit_replay.fleet.workers import death_text, seconds_text
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
@@ -160,7 +161,7 @@ def run_jobs_on_dask(
     try:
         client = client_type(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError, ValueError, TypeError) as err:
-        problem = " ".join(str(err).split()) or type(err).__name__
+        problem = one_line(err, or_name=True)
         raise MedkitReplayError(
             f"cannot reach the Dask scheduler ({problem})", path=address
         ) from None

@@ -22,7 +22,7 @@ from medkit_replay.fleet.stats import codes_table, overview, runs_table
 from medkit_replay.outputs.atomic import write_bytes_atomic
 from medkit_replay.outputs.csv_safety import write_frame
 from medkit_replay.outputs.html_page import cards, page_end, page_start, scrolling_table
-from medkit_replay.text import clip, xml_text
+from medkit_replay.text import clip, one_line, xml_text
 from medkit_replay.version import __version__
 
 if TYPE_CHECKING:
@@ -105,7 +105,7 @@ def _encodable(run: RunSummary) -> RunSummary:
 def _untabulated(run: RunSummary, error: Exception) -> RunSummary:
     from medkit_replay.fleet.run import RunSummary  # noqa: PLC0415  # no cycle at import
 
-    problem = " ".join(str(error).split())
+    problem = one_line(error)
     what = f"{type(error).__name__}: {problem}" if problem else type(error).__name__
     return RunSummary(path=run.path, kind=run.kind, error=f"{run.path}: cannot be reported: {what}")
 

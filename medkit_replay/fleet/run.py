@@ -19,7 +19,7 @@ from medkit_replay.inputs.recording import input_kind
 from medkit_replay.model import Loss, total_loss
 from medkit_replay.pipeline import replay
 from medkit_replay.result import STATUSES
-from medkit_replay.text import clip
+from medkit_replay.text import clip, one_line
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -223,7 +223,7 @@ def run_error(path: Path | str, error: Exception) -> str:
 def describe_error(error: BaseException) -> str:
     """An exception on one line: its type, and its text when it has one."""
     try:
-        text = " ".join(str(error).split())
+        text = one_line(error)
     except Exception:  # a text that cannot be made (a number too long to print)
         text = ""
     return f"{type(error).__name__}: {text}" if text else type(error).__name__

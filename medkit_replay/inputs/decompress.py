@@ -17,6 +17,8 @@ if sys.version_info >= (3, 14):
 else:  # the zstd binding rosbags itself depends on
     from backports import zstd
 
+from medkit_replay.text import one_line
+
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -121,7 +123,8 @@ def _frames(
                     raise ChunkDamageError(f"{compression} data gives no output")
             rest = decompressor.unused_data
     except _ERRORS as exc:
-        raise ChunkDamageError(f"{compression} data is damaged ({_one_line(exc)})") from None
+        reason = one_line(exc, 200, or_name=True)
+        raise ChunkDamageError(f"{compression} data is damaged ({reason})") from None
     if len(out) != size:
         raise ChunkDamageError(f"expands to {len(out)} bytes, not the declared {size}")
     return out
@@ -137,7 +140,3 @@ def _claimed_size(compression: str, frame: bytes) -> int | None:
         return int(lz4.frame.get_frame_info(frame)["content_size"]) or None  # 0: not stated
     except Exception:  # a damaged header: the decompressor says what is wrong
         return None
-
-
-def _one_line(exc: Exception) -> str:
-    return " ".join(str(exc).split())[:200] or type(exc).__name__

@@ -13,6 +13,7 @@ import yaml
 
 from medkit_replay.files import read_limited_text
 from medkit_replay.model import Loss
+from medkit_replay.text import one_line
 from medkit_replay.yaml_bounds import YamlBoundsError, compose_bounded
 
 if TYPE_CHECKING:
@@ -33,10 +34,6 @@ class Metadata:
     """What losing each file costs, as its ``files`` entry says (messages, span)."""
     compression_format: str = ""
     compression_mode: str = ""
-
-
-def _one_line(exc: BaseException | str) -> str:
-    return " ".join(str(exc).split())
 
 
 def _load_metadata(path: Path) -> tuple[object, yaml.Node | None]:
@@ -122,7 +119,7 @@ def read_metadata(directory: Path, warn: Callable[[str], None]) -> Metadata | No
         document, root = _load_metadata(path)
     except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError) as exc:
         # ValueError: an integer of thousands of digits, refused by Python's int().
-        warn(f"{path}: cannot be read ({_one_line(exc)})")
+        warn(f"{path}: cannot be read ({one_line(exc)})")
         return None
     except YamlBoundsError as exc:
         warn(f"{path}: cannot be read ({exc.message})")

@@ -6,7 +6,6 @@ and a remote object (the hints become concurrent range requests) share one readi
 
 from __future__ import annotations
 
-import io
 import os
 from contextlib import suppress
 from typing import TYPE_CHECKING, BinaryIO, Protocol
@@ -24,9 +23,6 @@ _fadvise = getattr(os, "posix_fadvise", None)  # not on every platform
 _WILLNEED = getattr(os, "POSIX_FADV_WILLNEED", 3)
 _NOWAIT = getattr(os, "RWF_NOWAIT", 0)
 _preadv = getattr(os, "preadv", None) if _NOWAIT else None
-
-STREAM_BLOCK = 8 * 1024 * 1024
-"""Bytes one sequential read of a remote object asks for (a file without an index is streamed)."""
 
 
 class RangeReader(Protocol):
@@ -55,6 +51,10 @@ class RangeReader(Protocol):
 
     def forget(self, before: int) -> None:
         """A hint: bytes before this offset will not be read again (what is held may go)."""
+        ...
+
+    def close(self) -> None:
+        """Release what is held (a file, connections, fetched bytes)."""
         ...
 
     def __enter__(self) -> Self: ...
@@ -161,37 +161,3 @@ class LocalRanges(Closing):
 
     def close(self) -> None:
         self._file.close()
-
-
-class RangeStream(io.RawIOBase):
-    """A RangeReader read from the start as a file (wrap it in ``io.BufferedReader``)."""
-
-    def __init__(self, reader: RangeReader) -> None:
-        super().__init__()
-        self._reader = reader
-        self._pos = 0
-
-    def readable(self) -> bool:
-        return True
-
-    def seekable(self) -> bool:
-        return True
-
-    def tell(self) -> int:
-        return self._pos
-
-    def seek(self, offset: int, whence: int = io.SEEK_SET) -> int:
-        base = {io.SEEK_SET: 0, io.SEEK_CUR: self._pos, io.SEEK_END: self._reader.size}[whence]
-        self._pos = max(0, base + offset)
-        return self._pos
-
-    def readinto(self, buffer: memoryview) -> int:  # type: ignore[override]
-        view = memoryview(buffer).cast("B")
-        got = self._reader.read_into(self._pos, view[: max(0, self._reader.size - self._pos)])
-        self._pos += got
-        return got
-
-    def close(self) -> None:
-        if not self.closed:
-            self._reader.__exit__(None, None, None)
-        super().close()

@@ -28,6 +28,7 @@ from medkit_replay.inputs.typestore import DecodeError, Decoder, make_decoder, o
 from medkit_replay.model import InputSummary, Loss, TopicSummary
 from medkit_replay.msgdefs import DefinitionError
 from medkit_replay.releases import default_release
+from medkit_replay.text import one_line
 
 if sys.version_info >= (3, 14):
     from compression import zstd
@@ -51,10 +52,6 @@ STORAGE_FILES: dict[str, Callable[[Path, int, Warn], StorageFile]] = {
 ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"  # a CDR payload starts with 00 0x instead, so this cannot clash
 MAX_HELD = 100_000
 """Most messages held to restore time order; beyond it the oldest leaves, later ones may be late."""
-
-
-def _one_line(exc: BaseException | str) -> str:
-    return " ".join(str(exc).split())
 
 
 def _natural_key(path: Path) -> list[int | str]:
@@ -166,8 +163,8 @@ class Rosbag2Input:
         if not self._files and paths:  # no paths: a followed input, its files yet to come
             self.close()
             if paths == [path]:
-                raise InputError(_one_line(problems[0]), path=str(path))
-            detail = _one_line("; ".join(problems))
+                raise InputError(one_line(problems[0]), path=str(path))
+            detail = one_line("; ".join(problems))
             raise InputError(f"nothing readable ({detail})", path=str(path))
         self.storage = meta.storage or (self._files[0].storage if self._files else "")
         # No bound of file k may pass the start of a later file: split files can overlap a little.
@@ -244,9 +241,9 @@ class Rosbag2Input:
         except (OSError, EOFError, zstd.ZstdError) as exc:
             if not written:
                 target.unlink(missing_ok=True)
-                raise NotABagError(f"cannot be decompressed ({_one_line(exc)})") from None
+                raise NotABagError(f"cannot be decompressed ({one_line(exc)})") from None
             self.ctx.warn(
-                f"{path}: compressed data is damaged ({_one_line(exc)}); read the rest", Loss()
+                f"{path}: compressed data is damaged ({one_line(exc)}); read the rest", Loss()
             )
         return target
 
@@ -361,7 +358,7 @@ class Rosbag2Input:
         self._late = (count + 1, first if count else item.t_ns)
 
     def _failed(self, topic: str, t_ns: int, exc: Exception) -> None:
-        count, first, _, reason = self._failures.get(topic, (0, t_ns, t_ns, _one_line(exc)))
+        count, first, _, reason = self._failures.get(topic, (0, t_ns, t_ns, one_line(exc)))
         self._failures[topic] = (count + 1, first, t_ns, reason)
 
     def _report_losses(self) -> None:

@@ -19,12 +19,11 @@ from collections import deque
 from struct import Struct
 from typing import IO, TYPE_CHECKING, Any
 
+from medkit_replay.closing import Closing
 from medkit_replay.outputs.json_report import SPOOLED_LISTS, encode_batch
 from medkit_replay.outputs.json_rows import ROW_SEPARATOR
 
 if TYPE_CHECKING:
-    from typing import Self
-
     from medkit_replay.spool import Spool
 
 _FRAME = Struct("<I32sIQ")  # list number, record class, chunk index, length of the pickled rows
@@ -37,7 +36,7 @@ FRAME_LIMIT = 1 << 31
 """The largest chunk the child takes (a spool chunk pickles to a few MB)."""
 
 
-class JsonAhead:
+class JsonAhead(Closing):
     """A :class:`~medkit_replay.spool.SpillListener` that has a child process encode spilled
     chunks, and an ``EncodedAhead`` for ``json_report.write_json_bytes``.
 
@@ -214,12 +213,6 @@ class JsonAhead:
         if self._file is not None:
             self._file.close()
             self._file = None
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
 
 
 def _read_exactly(stream: IO[bytes], size: int) -> bytes | None:

@@ -152,3 +152,16 @@ def test_the_child_refuses_a_frame_it_does_not_know(tmp_path: Path) -> None:
         )
     assert done.returncode == 2
     assert done.stdout == b""
+
+
+def test_a_with_block_closes_it_through_the_shared_closing() -> None:
+    """JsonAhead's context is Closing's (exit calls close), not a pair of its own."""
+    from medkit_replay.closing import Closing  # noqa: PLC0415
+
+    assert issubclass(JsonAhead, Closing)
+    assert "__enter__" not in vars(JsonAhead)
+    assert "__exit__" not in vars(JsonAhead)
+    with pytest.raises(RuntimeError), JsonAhead() as ahead:
+        ahead._file = io.BytesIO()
+        raise RuntimeError
+    assert ahead._file is None  # closed on the way out

@@ -84,12 +84,7 @@ class McapSummary(StorageFields):
         self._data_start = len(head) + length
         if self._data_start > self._size:
             raise NotABagError("MCAP file cut off inside its header record")
-        try:
-            profile = Cursor(reader.read(len(head), length)).string()
-        except DamageError:
-            raise NotABagError("MCAP header record is damaged") from None
-        if profile != "ros2":
-            self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
+        self._header_body(reader.read(len(head), length))
         self._data_end = self._size
         problem = self._read_footer_and_summary(reader)
         self.index_problem = problem
@@ -98,6 +93,15 @@ class McapSummary(StorageFields):
             self.start_ns = self.end_ns = None
             if problem:
                 self.summary_problem(problem)
+
+    def _header_body(self, body: bytes) -> None:
+        """Read the header record's profile; a profile other than ros2 is read anyway, said."""
+        try:
+            profile = Cursor(body).string()
+        except DamageError:
+            raise NotABagError("MCAP header record is damaged") from None
+        if profile != "ros2":
+            self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
 
     def summary_problem(self, problem: str) -> None:
         """Say why the summary cannot be used: the messages are still scanned, so a damaged

@@ -13,8 +13,6 @@ from medkit_replay.inputs.mcap.records import (
     NO_FOOTER,
     OP_CHANNEL,
     OP_HEADER,
-    Cursor,
-    DamageError,
 )
 from medkit_replay.inputs.ranges import LocalSource
 from medkit_replay.inputs.storage import RECORD_SIZE_LIMIT, NotABagError
@@ -68,12 +66,7 @@ class McapTail(McapFile):
                 raise NotABagError("MCAP file cut off before its header record ends")
             self._follow.wait()
         self._data_end = self._size
-        try:
-            profile = Cursor(body).string()
-        except DamageError:
-            raise NotABagError("MCAP header record is damaged") from None
-        if profile != "ros2":
-            self.warn(f"{self.path}: MCAP profile {profile!r}, not 'ros2'; reading it anyway")
+        self._header_body(body)
 
     def read(
         self, wants: Callable[[Connection], bool], cap_ns: int | None

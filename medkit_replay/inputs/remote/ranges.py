@@ -11,11 +11,11 @@ from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 from typing import TYPE_CHECKING, NamedTuple
 
 from medkit_replay.closing import Closing
-from medkit_replay.inputs.ranges import STREAM_BLOCK, RangeStream
 
 if TYPE_CHECKING:
     from typing import BinaryIO
 
+    from medkit_replay.inputs.ranges import RangeReader
     from medkit_replay.inputs.remote.store import RemoteObject
 
 BATCHES = 4
@@ -30,6 +30,8 @@ MAX_REQUEST = 8 * 1024 * 1024
 """Coalescing stops at this many bytes per request."""
 READ_AHEAD_LIMIT = 64 * 1024 * 1024
 """Most bytes of asked-ahead ranges held for one file; the oldest go first."""
+STREAM_BLOCK = 8 * 1024 * 1024
+"""Bytes one sequential read of a remote object asks for (a file without an index is streamed)."""
 
 
 class _Block(NamedTuple):
@@ -164,15 +166,41 @@ class RemoteRanges(Closing):
         self._held = 0
 
 
-class _AheadStream(RangeStream):
-    """A remote object read from the start, asking for the next block while this one is used
-    (the blocks before it are let go)."""
+class _AheadStream(io.RawIOBase):
+    """A remote object read from the start as a file (wrapped in ``io.BufferedReader``),
+    asking for the next block while this one is used (the blocks before it are let go)."""
+
+    def __init__(self, reader: RangeReader) -> None:
+        super().__init__()
+        self._reader = reader
+        self._pos = 0
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def tell(self) -> int:
+        return self._pos
+
+    def seek(self, offset: int, whence: int = io.SEEK_SET) -> int:
+        base = {io.SEEK_SET: 0, io.SEEK_CUR: self._pos, io.SEEK_END: self._reader.size}[whence]
+        self._pos = max(0, base + offset)
+        return self._pos
 
     def readinto(self, buffer: memoryview) -> int:  # type: ignore[override]
-        self._reader.forget(self.tell())
-        got = super().readinto(buffer)
-        self._reader.will_need(self.tell(), min(len(buffer), STREAM_BLOCK))
+        self._reader.forget(self._pos)
+        view = memoryview(buffer).cast("B")
+        got = self._reader.read_into(self._pos, view[: max(0, self._reader.size - self._pos)])
+        self._pos += got
+        self._reader.will_need(self._pos, min(len(buffer), STREAM_BLOCK))
         return got
+
+    def close(self) -> None:
+        if not self.closed:
+            self._reader.close()
+        super().close()
 
 
 class RemoteSource:

@@ -17,6 +17,7 @@ from medkit_replay.inputs.source import Message
 from medkit_replay.inputs.storage import NotABagError
 from medkit_replay.model import InputSummary, Loss, TopicSummary
 from medkit_replay.msgdefs import normalize_typename
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -182,7 +183,7 @@ class Rosbag1Input:
         self._late = (count + 1, first if count else item.t_ns)
 
     def _failed(self, topic: str, t_ns: int, exc: Exception) -> None:
-        reason = " ".join(str(exc).split()) or type(exc).__name__
+        reason = one_line(exc, or_name=True)
         count, first, _, why = self._failures.get(topic, (0, t_ns, t_ns, reason))
         self._failures[topic] = (count + 1, first, t_ns, why)
 

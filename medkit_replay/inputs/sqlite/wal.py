@@ -43,41 +43,44 @@ def _checksum(data: bytes, sums: tuple[int, int], big: bool) -> tuple[int, int]:
     return s1, s2
 
 
-def _page_size(raw: bytes) -> int | None:
-    """The page size a WAL header declares; None when SQLite would not read it as one."""
-    magic, version, page_size = struct.unpack(">3I", raw[:12])
-    size = 65536 if page_size == 1 else page_size
-    if magic not in _WAL_MAGICS or version != _WAL_VERSION or not 512 <= size <= 65536:
-        return None
-    return None if size & (size - 1) else size
-
-
 class _Header:
-    """A WAL header that passed its own checksum."""
+    """A WAL header as SQLite reads it: its byte order, page size, salts and checksum."""
 
     __slots__ = ("big", "page_size", "salts", "sums")
 
-    def __init__(self, raw: bytes) -> None:
-        magic, _, page_size, _, salt1, salt2, c1, c2 = struct.unpack(">8I", raw)
-        self.big = bool(magic & 1)
-        self.page_size = 65536 if page_size == 1 else page_size
-        self.salts = (salt1, salt2)
-        self.sums = (c1, c2)
+    def __init__(
+        self, big: bool, page_size: int, salts: tuple[int, int], sums: tuple[int, int]
+    ) -> None:
+        self.big = big
+        self.page_size = page_size
+        self.salts = salts
+        self.sums = sums
+
+    @staticmethod
+    def parse(raw: bytes) -> _Header | None:
+        """The header ``raw`` (a WAL's first bytes) holds; None when SQLite would not read it
+        as one (too short, another magic or version, an impossible page size)."""
+        if len(raw) < _HEADER:
+            return None
+        magic, version, size, _, salt1, salt2, c1, c2 = struct.unpack(">8I", raw[:_HEADER])
+        size = 65536 if size == 1 else size
+        if magic not in _WAL_MAGICS or version != _WAL_VERSION or not 512 <= size <= 65536:
+            return None
+        if size & (size - 1):
+            return None
+        return _Header(bool(magic & 1), size, (salt1, salt2), (c1, c2))
 
     @staticmethod
     def read(wal: Path) -> _Header | None:
-        """The header of ``wal``; None when there is none (no file, empty, not yet written)."""
+        """The header of ``wal`` when it passes its own checksum; None when there is none (no
+        file, empty, not yet written)."""
         try:
             with open_regular(wal) as stream:
                 raw = stream.read(_HEADER)
         except OSError:
             return None
-        if len(raw) < _HEADER:
-            return None
-        if _page_size(raw) is None:
-            return None
-        header = _Header(raw)
-        if _checksum(raw[:24], (0, 0), header.big) != header.sums:
+        header = _Header.parse(raw)
+        if header is None or _checksum(raw[:24], (0, 0), header.big) != header.sums:
             return None
         return header
 
@@ -92,12 +95,11 @@ def _committed_wal_bytes(wal: Path) -> int:
     a sparse file does), so nothing after it needs copying; 0 when no transaction is there.
     """
     with open_regular(wal) as stream:
-        header = stream.read(_HEADER)
-        page_size = _page_size(header) if len(header) == _HEADER else None
-        if page_size is None:
+        header = _Header.parse(stream.read(_HEADER))
+        if header is None:
             return 0
-        salts = list(struct.unpack(">2I", header[16:24]))
-        frame = _FRAME_HEADER + page_size
+        salts = list(header.salts)
+        frame = _FRAME_HEADER + header.page_size
         position = end = _HEADER
         while True:
             stream.seek(position)
