@@ -54,13 +54,10 @@ class ServedRecording:
         return max(self.origin_ns, min(t_ns, self.end_ns))
 
     def captures_at(self, code: str, t_ns: int) -> list[SnapshotCapture]:
-        """The freeze frames and snapshots of ``code`` taken by ``t_ns`` that the manager
-        keeps (one it later drops, by its cap or a clear, is not shown at any moment)."""
-        return [
-            c
-            for c in self.result.snapshots
-            if c.fault_code == code and c.t_ns <= t_ns and c.retained
-        ]
+        """The freeze frames and snapshots of ``code`` taken by ``t_ns``, with their flags:
+        the detail body shows those the manager keeps (a clear can drop a capture's rows yet
+        keep it as the fault's compact freeze frame)."""
+        return [c for c in self.result.snapshots if c.fault_code == code and c.t_ns <= t_ns]
 
     def recording_facts(self) -> dict[str, object]:
         """The ``x-medkit`` route's body: the recording served, its span and the release."""

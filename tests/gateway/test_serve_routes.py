@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import http.client
 import json
 import time
@@ -9,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.captures import SnapshotCapture, SnapshotTopic
 from medkit_replay.gateway.app import build_app
 from tests.gateway.schemas import response_schema, validate
 from tests.gateway.support import MISSION, NAV2, running, seconds, serve_replay
@@ -372,3 +374,36 @@ def test_a_stream_a_client_closes_frees_its_slot(served: ServedRecording) -> Non
                     break
             assert time.monotonic() < deadline, "the closed stream's slot was never freed"
             time.sleep(0.1)
+
+
+def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(
+    served: ServedRecording,
+) -> None:
+    # After a clear (retain_on_clear false) the manager drops the capture's rows but keeps
+    # its compact freeze frame: retained=False, freeze_frame=True.
+    fault = served.history.faults_at(served.end_ns)[0]
+    topic = SnapshotTopic(
+        topic="/battery", message_type="std_msgs/msg/Float64", message_t_ns=served.origin_ns,
+        data={"data": 12.5},
+    )  # fmt: skip
+    capture = SnapshotCapture(
+        fault_code=fault.fault_code, capture_id=1, t_ns=served.origin_ns, retained=False,
+        freeze_frame=True, topics=(topic,),
+    )  # fmt: skip
+    cleared = dataclasses.replace(
+        served, result=dataclasses.replace(served.result, snapshots=(capture,))
+    )
+    with running(build_app(cleared, speed=0)) as client:
+        app = next(
+            a["id"]
+            for a in client.get("/api/v1/apps").json()["items"]
+            if any(
+                f["fault_code"] == fault.fault_code
+                for f in client.get(f"/api/v1/apps/{a['id']}/faults?status=all").json()["items"]
+            )
+        )
+        body = client.get(f"/api/v1/apps/{app}/faults/{fault.fault_code}").json()
+    frames = [s for s in body["environment_data"]["snapshots"] if s["type"] == "freeze_frame"]
+    assert [(f["name"], f["data"]) for f in frames] == [
+        ("freeze_frame", {"/battery": {"data": 12.5}})
+    ]
