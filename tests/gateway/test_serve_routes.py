@@ -12,6 +12,9 @@ import pytest
 
 from medkit_replay.captures import SnapshotCapture, SnapshotTopic
 from medkit_replay.gateway.app import build_app
+from medkit_replay.gateway.stream import EventStream
+from medkit_replay.model import EVENT_ROWS, FaultEvent
+from medkit_replay.spool import Spool
 from tests.gateway.schemas import response_schema, validate
 from tests.gateway.support import MISSION, NAV2, running, seconds, serve_replay
 
@@ -407,3 +410,19 @@ def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(
     assert [(f["name"], f["data"]) for f in frames] == [
         ("freeze_frame", {"/battery": {"data": 12.5}})
     ]
+
+
+def test_a_spilled_stream_resumes_from_any_event(served: ServedRecording) -> None:
+    events: Spool[FaultEvent] = Spool(3, codec=EVENT_ROWS)
+    for event in served.result.events:
+        events.append(event)
+    spilled = dataclasses.replace(served, result=dataclasses.replace(served.result, events=events))
+    assert EventStream(spilled, speed=0, max_clients=2).times == [e.t_ns for e in events]
+    total = len(events)
+    with running(build_app(spilled, speed=0)) as client:
+        for after in (0, 4, 5, total - 1, total):
+            answer = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(after)})
+            frames = sse_frames(answer.text)
+            assert [int(f["id"]) for f in frames] == list(range(after + 1, total + 1))
+            codes = [json.loads(f["data"])["fault"]["fault_code"] for f in frames]
+            assert codes == [e.fault.fault_code for e in served.result.events][after:]
