@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.engine.correlation.engine import CorrelationEngine
 from medkit_replay.history import CorrelationState, FaultHistory
 from medkit_replay.model import FaultSnapshot, MutedFault
 from medkit_replay.pipeline import replay
@@ -135,3 +136,22 @@ def test_the_nodes_seen_are_every_reporting_source_and_logging_node() -> None:
     reporters = {r.source_id for r in result.reports}
     assert loggers - reporters  # nodes that logged without a report are seen too
     assert history.sources == loggers | reporters
+
+
+def test_the_cleanup_timer_never_changes_the_correlation_view(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Why the history does not watch it: only reports and clears change the view recorded.
+    ticked = CorrelationEngine.cleanup_expired
+    ticks = []
+
+    def checked(engine: CorrelationEngine, now_ns: int) -> None:
+        before = (engine.muted_faults(), engine.clusters())
+        ticked(engine, now_ns)
+        assert (engine.muted_faults(), engine.clusters()) == before
+        ticks.append(now_ns)
+
+    monkeypatch.setattr(CorrelationEngine, "cleanup_expired", checked)
+    history = FaultHistory()
+    result = replay([MISSION], [NAV2], history=history)
+    assert ticks and result.muted_faults  # the timer ran with muted symptoms held
