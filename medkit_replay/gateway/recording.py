@@ -101,8 +101,6 @@ def served_recording(
     first, last = result.span()
     origin = first if first is not None else 0
     end = last if last is not None else origin
-    names: set[str] = set(graph.publishes) | set(graph.subscribes) if graph is not None else set()
-    names.update(history.sources)
     clips: dict[str, Path] = {}
     sizes: dict[str, int] = {}
     for recording in result.recordings:
@@ -114,7 +112,7 @@ def served_recording(
                 # The gateway's size_bytes: the bag folder's files on disk.
                 sizes[recording.recording_id] = sum(p.stat().st_size for p in folder)
     formats = {_FORMATS[p.suffix] for p in clips.values()}
-    entities = discover(sorted(names), graph)
+    entities = discover(history.sources, graph)  # joined with the graph's nodes there
     served = ServedRecording(
         result=result,
         history=history,
