@@ -32,6 +32,7 @@ from medkit_replay.gateway.errors import (
     ID_FIELDS,
     GatewayError,
     body_bytes,
+    bulk_data_not_found,
     error_body,
     error_status,
     invalid_parameter,
@@ -289,10 +290,7 @@ class GatewayApp:
         # Only a clip this replay wrote: looked up by its id, never a path from the request.
         path = served.clips.get(found.recording.recording_id)
         if path is None:
-            raise GatewayError(
-                404, ERR_RESOURCE_NOT_FOUND, "Bulk-data not found",
-                {"bulk_data_id": request.path_params["file_id"]},
-            )  # fmt: skip
+            raise bulk_data_not_found(request.path_params["file_id"])
         return FileResponse(path, media_type=found.mimetype, filename=found.filename)
 
     # -- the event stream ------------------------------------------------------------------
