@@ -41,7 +41,6 @@ class ServedRecording:
     rosbag_format: str = "mcap"
     bag_sizes: dict[str, int] = dataclasses.field(default_factory=dict)
     max_code_length: int = 256
-    node_to_app: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def moment(self, seconds: float | None) -> int:
         """Bag time of ``seconds`` from the start; None: ``--at``, else the end.
@@ -112,18 +111,16 @@ def served_recording(
                 # The gateway's size_bytes: the bag folder's files on disk.
                 sizes[recording.recording_id] = sum(p.stat().st_size for p in folder)
     formats = {_FORMATS[p.suffix] for p in clips.values()}
-    entities = discover(history.sources, graph)  # joined with the graph's nodes there
     served = ServedRecording(
         result=result,
         history=history,
-        entities=entities,
+        entities=discover(history.sources, graph),  # joined with the graph's nodes there
         origin_ns=origin,
         end_ns=end,
         clips=clips,
         rosbag_format=formats.pop() if len(formats) == 1 else "mcap",
         bag_sizes=sizes,
         max_code_length=release_named(result.upstream_release).max_fault_code_length,
-        node_to_app={a.fqn: a.id for a in entities.list("apps") if a.fqn},
     )
     if at_sec is not None:
         return dataclasses.replace(served, default_at_ns=served.moment(at_sec))

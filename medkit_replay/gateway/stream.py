@@ -48,8 +48,9 @@ class EventStream:
 
     def __init__(self, served: ServedRecording, *, speed: float, max_clients: int) -> None:
         self.events = served.result.events
-        self.apps = {a.id for a in served.entities.list("apps")}
-        self.node_to_app = served.node_to_app
+        apps = served.entities.list("apps")
+        self.apps = {a.id for a in apps}
+        self.node_to_app = {a.fqn: a.id for a in apps if a.fqn}
         self.times = _times(self.events)
         self.speed = speed
         self.max_clients = max_clients
