@@ -185,7 +185,7 @@ def _replay(
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
     from medkit_replay.evidence.folder import refuse_folder_overlap  # noqa: PLC0415
-    from medkit_replay.gateway.recording import served_recording  # noqa: PLC0415
+    from medkit_replay.gateway.recording import retain_on_clear, served_recording  # noqa: PLC0415
     from medkit_replay.history import FaultHistory  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
@@ -216,4 +216,5 @@ def _replay(
 
     for line in result.warnings:  # recorded text: shown escaped, as the summary shows it
         warn(printable(line))
-    return served_recording(result, history, graph, at_sec)
+    retained = retain_on_clear(configs)  # the files the replay read, read again
+    return served_recording(result, history, graph, at_sec, retain_on_clear=retained)

@@ -249,6 +249,7 @@ class GatewayApp:
             kind=entity.kind,
             entity_id=entity.id,
             rosbag_format=served.rosbag_format,
+            retain_on_clear=served.retain_on_clear,
             bag_sizes=served.bag_sizes,
         )
         return _json(200, body)

@@ -10,11 +10,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from medkit_replay.config.params import load_parameters
+from medkit_replay.config.release import release_of
+from medkit_replay.config.snapshots import snapshot_config
 from medkit_replay.gateway.entities import discover
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from medkit_replay.captures import SnapshotCapture
     from medkit_replay.evidence.graph import NodeGraph
     from medkit_replay.gateway.entities import Entities
@@ -28,7 +33,8 @@ class ServedRecording:
 
     ``origin_ns`` is the recording's start (``at=0``), ``end_ns`` its last message; ``clips``
     maps a black-box recording's id to the storage file the replay wrote for it (the only
-    files ever served); ``default_at_ns`` is ``--at`` (None: the end).
+    files ever served); ``default_at_ns`` is ``--at`` (None: the end); ``retain_on_clear``:
+    ``snapshots.retain_on_clear`` as the replay applied it.
     """
 
     result: Result
@@ -41,6 +47,7 @@ class ServedRecording:
     rosbag_format: str = "mcap"
     bag_sizes: dict[str, int] = dataclasses.field(default_factory=dict)
     max_code_length: int = 256
+    retain_on_clear: bool = False
 
     def moment(self, seconds: float | None) -> int:
         """Bag time of ``seconds`` from the start; None: ``--at``, else the end.
@@ -88,8 +95,20 @@ _FORMATS = {".mcap": "mcap", ".db3": "sqlite3"}
 """A clip's storage file by suffix, and the format the gateway names it by."""
 
 
+def retain_on_clear(configs: Iterable[Path]) -> bool:
+    """``snapshots.retain_on_clear`` as a replay with these config files applies it."""
+    params = load_parameters(configs)
+    snapshots, _ = snapshot_config(params.node("fault_manager"), release_of(params))
+    return snapshots.retain_on_clear
+
+
 def served_recording(
-    result: Result, history: FaultHistory, graph: NodeGraph | None, at_sec: float | None
+    result: Result,
+    history: FaultHistory,
+    graph: NodeGraph | None,
+    at_sec: float | None,
+    *,
+    retain_on_clear: bool = False,
 ) -> ServedRecording:
     """What ``serve`` answers from, once the replay (with ``history``) is done.
 
@@ -121,6 +140,7 @@ def served_recording(
         rosbag_format=formats.pop() if len(formats) == 1 else "mcap",
         bag_sizes=sizes,
         max_code_length=release_named(result.upstream_release).max_fault_code_length,
+        retain_on_clear=retain_on_clear,
     )
     if at_sec is not None:
         return dataclasses.replace(served, default_at_ns=served.moment(at_sec))

@@ -379,34 +379,45 @@ def test_a_stream_a_client_closes_frees_its_slot(served: ServedRecording) -> Non
             time.sleep(0.1)
 
 
-def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(
-    served: ServedRecording,
-) -> None:
-    # After a clear (retain_on_clear false) the manager drops the capture's rows but keeps
-    # its compact freeze frame: retained=False, freeze_frame=True.
-    fault = served.history.faults_at(served.end_ns)[0]
+def with_capture(served: ServedRecording, *, retained: bool) -> ServedRecording:
+    """``served`` with one freeze-frame capture of its first fault, taken at the start."""
     topic = SnapshotTopic(
         topic="/battery", message_type="std_msgs/msg/Float64", message_t_ns=served.origin_ns,
         data={"data": 12.5},
     )  # fmt: skip
     capture = SnapshotCapture(
-        fault_code=fault.fault_code, capture_id=1, t_ns=served.origin_ns, retained=False,
-        freeze_frame=True, topics=(topic,),
+        fault_code=served.history.faults_at(served.end_ns)[0].fault_code, capture_id=1,
+        t_ns=served.origin_ns, retained=retained, freeze_frame=True, topics=(topic,),
     )  # fmt: skip
-    cleared = dataclasses.replace(
+    return dataclasses.replace(
         served, result=dataclasses.replace(served.result, snapshots=(capture,))
     )
-    with running(build_app(cleared, speed=0)) as client:
+
+
+def served_snapshots(served: ServedRecording) -> list[dict[str, object]]:
+    """The detail route's snapshots of the first fault, from the app that reports it."""
+    code = served.history.faults_at(served.end_ns)[0].fault_code
+    with running(build_app(served, speed=0)) as client:
         app = next(
             a["id"]
             for a in client.get("/api/v1/apps").json()["items"]
             if any(
-                f["fault_code"] == fault.fault_code
+                f["fault_code"] == code
                 for f in client.get(f"/api/v1/apps/{a['id']}/faults?status=all").json()["items"]
             )
         )
-        body = client.get(f"/api/v1/apps/{app}/faults/{fault.fault_code}").json()
-    frames = [s for s in body["environment_data"]["snapshots"] if s["type"] == "freeze_frame"]
+        return client.get(f"/api/v1/apps/{app}/faults/{code}").json()["environment_data"][
+            "snapshots"
+        ]
+
+
+def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(
+    served: ServedRecording,
+) -> None:
+    # After a clear (retain_on_clear false) the manager drops the capture's rows but keeps
+    # its compact freeze frame: retained=False, freeze_frame=True.
+    frames = [s for s in served_snapshots(with_capture(served, retained=False))
+              if s["type"] == "freeze_frame"]  # fmt: skip
     assert [(f["name"], f["data"]) for f in frames] == [
         ("freeze_frame", {"/battery": {"data": 12.5}})
     ]
@@ -426,3 +437,22 @@ def test_a_spilled_stream_resumes_from_any_event(served: ServedRecording) -> Non
             assert [int(f["id"]) for f in frames] == list(range(after + 1, total + 1))
             codes = [json.loads(f["data"])["fault"]["fault_code"] for f in frames]
             assert codes == [e.fault.fault_code for e in served.result.events][after:]
+
+
+def test_retain_on_clear_serves_the_compact_frame_beside_the_rows(
+    served: ServedRecording, tmp_path: Path
+) -> None:
+    retain = tmp_path / "retain.yaml"
+    retain.write_text(
+        "fault_manager:\n  ros__parameters:\n    snapshots:\n      retain_on_clear: true\n"
+    )
+    assert serve_replay([MISSION], [NAV2, retain]).retain_on_clear
+    assert not served.retain_on_clear
+    held = with_capture(served, retained=True)
+    names = {
+        retained: [
+            s["name"] for s in served_snapshots(dataclasses.replace(held, retain_on_clear=retained))
+        ]
+        for retained in (False, True)
+    }
+    assert names == {False: ["battery"], True: ["battery", "freeze_frame"]}
