@@ -27,6 +27,8 @@ from medkit_replay.commands import (
 from medkit_replay.errors import MedkitReplayError, Terminated
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from medkit_replay.gateway.recording import ServedRecording
 
 
@@ -185,7 +187,7 @@ def _replay(
     from medkit_replay.config.referenced import config_files  # noqa: PLC0415
     from medkit_replay.evidence import EvidenceOptions, load_graph  # noqa: PLC0415
     from medkit_replay.evidence.folder import refuse_folder_overlap  # noqa: PLC0415
-    from medkit_replay.gateway.recording import retain_on_clear, served_recording  # noqa: PLC0415
+    from medkit_replay.gateway.recording import served_recording  # noqa: PLC0415
     from medkit_replay.history import FaultHistory  # noqa: PLC0415
     from medkit_replay.pipeline import replay  # noqa: PLC0415
 
@@ -218,3 +220,14 @@ def _replay(
         warn(printable(line))
     retained = retain_on_clear(configs)  # the files the replay read, read again
     return served_recording(result, history, graph, at_sec, retain_on_clear=retained)
+
+
+def retain_on_clear(configs: Iterable[Path]) -> bool:
+    """``snapshots.retain_on_clear`` as a replay with these config files applies it."""
+    from medkit_replay.config.params import load_parameters  # noqa: PLC0415
+    from medkit_replay.config.release import release_of  # noqa: PLC0415
+    from medkit_replay.config.snapshots import snapshot_config  # noqa: PLC0415
+
+    params = load_parameters(configs)
+    snapshots, _ = snapshot_config(params.node("fault_manager"), release_of(params))
+    return snapshots.retain_on_clear

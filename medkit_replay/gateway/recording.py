@@ -10,16 +10,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from medkit_replay.config.params import load_parameters
-from medkit_replay.config.release import release_of
-from medkit_replay.config.snapshots import snapshot_config
 from medkit_replay.gateway.entities import discover
 from medkit_replay.model import NS_PER_SEC
 from medkit_replay.releases import release_named
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
-
     from medkit_replay.captures import SnapshotCapture
     from medkit_replay.evidence.graph import NodeGraph
     from medkit_replay.gateway.entities import Entities
@@ -93,13 +88,6 @@ class ServedRecording:
 
 _FORMATS = {".mcap": "mcap", ".db3": "sqlite3"}
 """A clip's storage file by suffix, and the format the gateway names it by."""
-
-
-def retain_on_clear(configs: Iterable[Path]) -> bool:
-    """``snapshots.retain_on_clear`` as a replay with these config files applies it."""
-    params = load_parameters(configs)
-    snapshots, _ = snapshot_config(params.node("fault_manager"), release_of(params))
-    return snapshots.retain_on_clear
 
 
 def served_recording(

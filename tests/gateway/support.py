@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING
 import httpx
 import uvicorn
 
+from medkit_replay.commands.serve import retain_on_clear
 from medkit_replay.evidence import EvidenceOptions, load_graph
-from medkit_replay.gateway.recording import retain_on_clear, served_recording
+from medkit_replay.gateway.recording import served_recording
 from medkit_replay.history import FaultHistory
 from medkit_replay.pipeline import replay
 
