@@ -2,6 +2,7 @@
 
 Usage:
     python benchmarks/bench_serve.py [--out DIR] [--requests 1000] [--seed 1]
+    python benchmarks/bench_serve.py --index [--out DIR] [--seed 1]
     python benchmarks/bench_serve.py --stacks [--requests 2000]
 
 Serve mode starts the real command (``python -m medkit_replay.cli serve MISSION --config PARAMS
@@ -9,6 +10,10 @@ Serve mode starts the real command (``python -m medkit_replay.cli serve MISSION 
 measures the time until it listens (replay and index) and its peak RSS, then one client (httpx,
 one connection) sends ``--requests`` ``GET /api/v1/faults?status=all&at=T`` at random moments
 T and prints p50, p99 and the slowest, and the same for the fault detail and the entity list.
+
+Index mode replays the same mission with ``replay()`` in a child process, once without and once
+with a FaultHistory (what serve answers from), and prints the FaultEvents, the states the
+history holds (``len(history)``) and each child's peak RSS.
 
 Stacks mode serves one ~40 KB JSON body (a fault list) with Starlette on uvicorn and with
 aiohttp, each in its own process, and prints their import time and request latencies from
@@ -111,6 +116,31 @@ def serve_mode(out: Path, requests: int, seed: int) -> None:
           f"peak RSS {usage.ru_maxrss / 1024:.0f} MiB")  # fmt: skip
 
 
+INDEX = """
+import resource, sys
+from medkit_replay.history import FaultHistory
+from medkit_replay.pipeline import replay
+history = FaultHistory() if sys.argv[3] == "index" else None
+result = replay([sys.argv[1]], [sys.argv[2]], history=history)
+held = f", {len(history):,} states in the index" if history is not None else ""
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(f"{len(result.events):,} FaultEvents{held}; peak RSS {peak:.0f} MiB")
+"""
+
+
+def index_mode(out: Path, seed: int) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    bag = mission_recording(out, seed, 600)
+    params = out / "bench_params.yaml"
+    params.write_text(PARAMS)
+    for kind in ("replay", "index"):
+        line = subprocess.run(
+            [sys.executable, "-c", INDEX, str(bag), str(params), kind],
+            check=True, capture_output=True, text=True,
+        ).stdout.strip()  # fmt: skip
+        print(f"{'replay alone' if kind == 'replay' else 'with the index':14}: {line}")
+
+
 STARLETTE = """
 import json, sys, time
 t = time.perf_counter()
@@ -176,10 +206,13 @@ def main() -> None:
     parser.add_argument("--requests", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--stacks", action="store_true")
+    parser.add_argument("--index", action="store_true")
     args = parser.parse_args()
     print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}")
     if args.stacks:
         stacks_mode(args.requests)
+    elif args.index:
+        index_mode(args.out, args.seed)
     else:
         serve_mode(args.out, args.requests, args.seed)
 

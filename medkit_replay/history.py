@@ -25,6 +25,10 @@ class CorrelationState:
 _NO_CORRELATION = CorrelationState()
 
 
+def _utf8(code: str) -> bytes:
+    return code.encode("utf-8")
+
+
 @dataclass(slots=True)
 class FaultHistory:
     """Per fault code, its snapshots at each bag time it changed; and the correlation states.
@@ -35,8 +39,6 @@ class FaultHistory:
 
     _times: dict[str, list[int]] = field(default_factory=dict)
     _states: dict[str, list[FaultSnapshot]] = field(default_factory=dict)
-    _codes: list[str] = field(default_factory=list)  # byte order, kept sorted on insert
-    _keys: list[bytes] = field(default_factory=list)  # the codes' UTF-8, for the insert
     _correlation_times: list[int] = field(default_factory=list)
     _correlation: list[CorrelationState] = field(default_factory=list)
     sources: set[str] = field(default_factory=set)
@@ -52,10 +54,6 @@ class FaultHistory:
         if times is None:
             self._times[code] = [t_ns]
             self._states[code] = [snapshot]
-            key = code.encode("utf-8")
-            index = bisect_right(self._keys, key)
-            self._keys.insert(index, key)
-            self._codes.insert(index, code)
             return
         states = self._states[code]
         if states[-1] == snapshot:
@@ -84,7 +82,7 @@ class FaultHistory:
     @property
     def codes(self) -> tuple[str, ...]:
         """Every fault code the replay stored, in byte order."""
-        return tuple(self._codes)
+        return tuple(sorted(self._times, key=_utf8))
 
     @property
     def change_times(self) -> tuple[int, ...]:
@@ -104,7 +102,7 @@ class FaultHistory:
     def faults_at(self, t_ns: int) -> list[FaultSnapshot]:
         """Every fault known once ``t_ns`` has passed, in fault_code byte order."""
         found = []
-        for code in self._codes:
+        for code in self.codes:
             times = self._times[code]
             index = bisect_right(times, t_ns)
             if index:

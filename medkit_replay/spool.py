@@ -9,6 +9,7 @@ record while it is held in memory, as an appended record does.
 from __future__ import annotations
 
 import errno
+import itertools
 import os
 import pickle
 import tempfile
@@ -153,13 +154,15 @@ class Spool(Sequence[T], Generic[T]):
         self._cache = (index, chunk)
         return chunk
 
-    def _records(self, items: list[object]) -> Iterator[T]:
-        """The records of a chunk or the tail; rows are replaced by their records as read."""
+    def _records(self, items: list[object], start: int = 0) -> Iterator[T]:
+        """The records of a chunk or the tail from ``start``; rows are replaced by their
+        records as read."""
         codec = self._codec
         if codec is None:
-            yield from items  # type: ignore[misc]  # records, without a codec
+            yield from itertools.islice(items, start, None)  # records, without a codec
             return
-        for index, item in enumerate(items):
+        for index in range(start, len(items)):
+            item = items[index]
             if type(item) is tuple:
                 item = items[index] = codec.decode(item)
             yield item  # type: ignore[misc]  # a record
@@ -198,9 +201,22 @@ class Spool(Sequence[T], Generic[T]):
         return self._spilled + len(self._tail)
 
     def __iter__(self) -> Iterator[T]:
-        for index in range(len(self._chunks)):
-            yield from self._records(self._chunk(index))
-        yield from self._records(self._tail)
+        return self.iter_from(0)
+
+    def iter_from(self, start: int) -> Iterator[T]:
+        """The records from index ``start`` on, in order (none past the end): the chunks
+        before the one holding ``start`` are neither read nor decoded."""
+        if start < 0:
+            raise ValueError(f"a spool is read from index 0 or more, not {start}")
+        return self._iter_from(start)
+
+    def _iter_from(self, start: int) -> Iterator[T]:
+        first = bisect_right(self._starts, start) - 1 if start < self._spilled else None
+        if first is not None:
+            yield from self._records(self._chunk(first), start - self._starts[first])
+            for index in range(first + 1, len(self._chunks)):
+                yield from self._records(self._chunk(index))
+        yield from self._records(self._tail, max(start - self._spilled, 0))
 
     @overload
     def __getitem__(self, index: int) -> T: ...

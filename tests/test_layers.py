@@ -242,8 +242,9 @@ ALLOWED: dict[str, set[str]] = {
     "tuning": NEUTRAL
     | {"result", "files", "spool", "config", "engine", "pipeline", "checks", "fleet", "outputs"},
     # gateway answers the gateway's REST API from a Result and its FaultHistory; it reuses the
-    # engine's query rules (ListFaults) and reads the node graph's type.
-    "gateway": NEUTRAL | {"result", "history", "engine", "evidence"},
+    # engine's query rules (ListFaults) and reads the node graph's type; the event stream
+    # resumes a spooled event log from its chunk (Spool.iter_from).
+    "gateway": NEUTRAL | {"result", "history", "engine", "evidence", "spool"},
     "pytest_plugin": NEUTRAL | {"result", "pipeline", "checks", "diffing", "outputs"},
     "commands": NEUTRAL
     | {

@@ -5,9 +5,9 @@ The web stack (Starlette, uvicorn: the ``serve`` extra) is loaded only here, aft
 
 from __future__ import annotations
 
-import contextlib
 import math
 import shutil
+import signal
 import socket
 import sys
 import tempfile
@@ -24,9 +24,11 @@ from medkit_replay.commands import (
     local_paths,
     path_option,
 )
-from medkit_replay.errors import MedkitReplayError
+from medkit_replay.errors import MedkitReplayError, Terminated
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from medkit_replay.gateway.recording import ServedRecording
 
 
@@ -91,10 +93,10 @@ def serve(
 
     The web UI, the Foxglove extension, the MCP adapter and the generated clients take
     http://HOST:PORT (or http://HOST:PORT/at/SECONDS for one moment); every fault route
-    also takes ?at=SECONDS. Ctrl-C stops the server.
+    also takes ?at=SECONDS. Ctrl-C or SIGTERM stops the server.
 
-    Exit status: 0 stopped by Ctrl-C; 2 bad usage, an input that cannot be read, an invalid
-    config, or an address that cannot be listened on.
+    Exit status: 0 stopped by Ctrl-C or SIGTERM; 2 bad usage, an input that cannot be read,
+    an invalid config, or an address that cannot be listened on.
 
     \b
     Examples:
@@ -137,9 +139,15 @@ def serve(
             timeout_graceful_shutdown=1,
             lifespan="off",
         )
-        # uvicorn hands Ctrl-C on once it has shut down: the way to stop, not a failure.
-        with contextlib.suppress(KeyboardInterrupt):
+        # uvicorn hands Ctrl-C and SIGTERM (docker stop, systemd) on once it has shut down:
+        # the ways to stop, not failures.
+        try:
             uvicorn.Server(config).run(sockets=[listener])
+        except KeyboardInterrupt:
+            pass
+        except Terminated as stop:
+            if stop.signum != signal.SIGTERM:
+                raise
         click.echo("Stopped.", err=True)
     finally:
         listener.close()
@@ -210,4 +218,16 @@ def _replay(
 
     for line in result.warnings:  # recorded text: shown escaped, as the summary shows it
         warn(printable(line))
-    return served_recording(result, history, graph, at_sec)
+    retained = retain_on_clear(configs)  # the files the replay read, read again
+    return served_recording(result, history, graph, at_sec, retain_on_clear=retained)
+
+
+def retain_on_clear(configs: Iterable[Path]) -> bool:
+    """``snapshots.retain_on_clear`` as a replay with these config files applies it."""
+    from medkit_replay.config.params import load_parameters  # noqa: PLC0415
+    from medkit_replay.config.release import release_of  # noqa: PLC0415
+    from medkit_replay.config.snapshots import snapshot_config  # noqa: PLC0415
+
+    params = load_parameters(configs)
+    snapshots, _ = snapshot_config(params.node("fault_manager"), release_of(params))
+    return snapshots.retain_on_clear

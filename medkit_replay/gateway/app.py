@@ -32,6 +32,7 @@ from medkit_replay.gateway.errors import (
     ID_FIELDS,
     GatewayError,
     body_bytes,
+    bulk_data_not_found,
     error_body,
     error_status,
     invalid_parameter,
@@ -248,6 +249,7 @@ class GatewayApp:
             kind=entity.kind,
             entity_id=entity.id,
             rosbag_format=served.rosbag_format,
+            retain_on_clear=served.retain_on_clear,
             bag_sizes=served.bag_sizes,
         )
         return _json(200, body)
@@ -289,10 +291,7 @@ class GatewayApp:
         # Only a clip this replay wrote: looked up by its id, never a path from the request.
         path = served.clips.get(found.recording.recording_id)
         if path is None:
-            raise GatewayError(
-                404, ERR_RESOURCE_NOT_FOUND, "Bulk-data not found",
-                {"bulk_data_id": request.path_params["file_id"]},
-            )  # fmt: skip
+            raise bulk_data_not_found(request.path_params["file_id"])
         return FileResponse(path, media_type=found.mimetype, filename=found.filename)
 
     # -- the event stream ------------------------------------------------------------------

@@ -33,7 +33,7 @@ def bulk_categories_body() -> JsonObject:
 
 def rosbag_mimetype(fmt: str) -> str:
     """The MIME type of a bag in ``fmt`` (``mcap``, ``sqlite3``)."""
-    return _MIMETYPES.get("sqlite3" if fmt == "db3" else fmt, "application/octet-stream")
+    return _MIMETYPES.get(fmt, "application/octet-stream")
 
 
 def bulk_source_filters(kind: str, sources: frozenset[str], fallback: str) -> list[str]:

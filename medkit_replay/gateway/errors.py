@@ -22,8 +22,6 @@ ERR_RESOURCE_NOT_FOUND = "resource-not-found"
 ERR_INVALID_PARAMETER = "invalid-parameter"
 ERR_SERVICE_UNAVAILABLE = "service-unavailable"
 ERR_INTERNAL_ERROR = "internal-error"
-ERR_COLLECTION_NOT_SUPPORTED = "collection-not-supported"
-ERR_PAYLOAD_TOO_LARGE = "payload-too-large"
 ERR_VENDOR_ERROR = "vendor-error"
 
 _VENDOR_PREFIX = "x-medkit-"

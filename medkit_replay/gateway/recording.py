@@ -28,7 +28,8 @@ class ServedRecording:
 
     ``origin_ns`` is the recording's start (``at=0``), ``end_ns`` its last message; ``clips``
     maps a black-box recording's id to the storage file the replay wrote for it (the only
-    files ever served); ``default_at_ns`` is ``--at`` (None: the end).
+    files ever served); ``default_at_ns`` is ``--at`` (None: the end); ``retain_on_clear``:
+    ``snapshots.retain_on_clear`` as the replay applied it.
     """
 
     result: Result
@@ -41,7 +42,7 @@ class ServedRecording:
     rosbag_format: str = "mcap"
     bag_sizes: dict[str, int] = dataclasses.field(default_factory=dict)
     max_code_length: int = 256
-    node_to_app: dict[str, str] = dataclasses.field(default_factory=dict)
+    retain_on_clear: bool = False
 
     def moment(self, seconds: float | None) -> int:
         """Bag time of ``seconds`` from the start; None: ``--at``, else the end.
@@ -54,13 +55,10 @@ class ServedRecording:
         return max(self.origin_ns, min(t_ns, self.end_ns))
 
     def captures_at(self, code: str, t_ns: int) -> list[SnapshotCapture]:
-        """The freeze frames and snapshots of ``code`` taken by ``t_ns`` that the manager
-        keeps (one it later drops, by its cap or a clear, is not shown at any moment)."""
-        return [
-            c
-            for c in self.result.snapshots
-            if c.fault_code == code and c.t_ns <= t_ns and c.retained
-        ]
+        """The freeze frames and snapshots of ``code`` taken by ``t_ns``, with their flags:
+        the detail body shows those the manager keeps (a clear can drop a capture's rows yet
+        keep it as the fault's compact freeze frame)."""
+        return [c for c in self.result.snapshots if c.fault_code == code and c.t_ns <= t_ns]
 
     def recording_facts(self) -> dict[str, object]:
         """The ``x-medkit`` route's body: the recording served, its span and the release."""
@@ -93,7 +91,12 @@ _FORMATS = {".mcap": "mcap", ".db3": "sqlite3"}
 
 
 def served_recording(
-    result: Result, history: FaultHistory, graph: NodeGraph | None, at_sec: float | None
+    result: Result,
+    history: FaultHistory,
+    graph: NodeGraph | None,
+    at_sec: float | None,
+    *,
+    retain_on_clear: bool = False,
 ) -> ServedRecording:
     """What ``serve`` answers from, once the replay (with ``history``) is done.
 
@@ -104,8 +107,6 @@ def served_recording(
     first, last = result.span()
     origin = first if first is not None else 0
     end = last if last is not None else origin
-    names: set[str] = set(graph.publishes) | set(graph.subscribes) if graph is not None else set()
-    names.update(history.sources)
     clips: dict[str, Path] = {}
     sizes: dict[str, int] = {}
     for recording in result.recordings:
@@ -117,18 +118,17 @@ def served_recording(
                 # The gateway's size_bytes: the bag folder's files on disk.
                 sizes[recording.recording_id] = sum(p.stat().st_size for p in folder)
     formats = {_FORMATS[p.suffix] for p in clips.values()}
-    entities = discover(sorted(names), graph)
     served = ServedRecording(
         result=result,
         history=history,
-        entities=entities,
+        entities=discover(history.sources, graph),  # joined with the graph's nodes there
         origin_ns=origin,
         end_ns=end,
         clips=clips,
         rosbag_format=formats.pop() if len(formats) == 1 else "mcap",
         bag_sizes=sizes,
         max_code_length=release_named(result.upstream_release).max_fault_code_length,
-        node_to_app={a.fqn: a.id for a in entities.list("apps") if a.fqn},
+        retain_on_clear=retain_on_clear,
     )
     if at_sec is not None:
         return dataclasses.replace(served, default_at_ns=served.moment(at_sec))

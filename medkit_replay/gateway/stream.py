@@ -27,11 +27,20 @@ from medkit_replay.gateway.stream_json import (
     sse_event,
 )
 from medkit_replay.model import NS_PER_SEC
+from medkit_replay.spool import Spool
 
 if TYPE_CHECKING:
-    from collections.abc import AsyncIterator
+    from collections.abc import AsyncIterator, Sequence
 
     from medkit_replay.gateway.recording import ServedRecording
+    from medkit_replay.model import FaultEvent
+
+
+def _times(events: Sequence[FaultEvent]) -> list[int]:
+    """Every event's bag time; a spool's from its rows (whose first field it is), undecoded."""
+    if isinstance(events, Spool) and events.codec is not None:
+        return [row[0] for row in events.rows()]  # type: ignore[misc]  # t_ns, an int
+    return [event.t_ns for event in events]
 
 
 class EventStream:
@@ -39,9 +48,10 @@ class EventStream:
 
     def __init__(self, served: ServedRecording, *, speed: float, max_clients: int) -> None:
         self.events = served.result.events
-        self.apps = {a.id for a in served.entities.list("apps")}
-        self.node_to_app = served.node_to_app
-        self.times = [event.t_ns for event in self.events]
+        apps = served.entities.list("apps")
+        self.apps = {a.id for a in apps}
+        self.node_to_app = {a.fqn: a.id for a in apps if a.fqn}
+        self.times = _times(self.events)
         self.speed = speed
         self.max_clients = max_clients
         # A stream is open while its generator lives and has not ended; one a client dropped
@@ -82,8 +92,14 @@ class EventStream:
             return
         origin_ns, started = times[first], time.monotonic()
         # In order from the first asked: a spool read by index would reload a chunk each
-        # time two streams take turns.
-        for index, event in enumerate(itertools.islice(self.events, first, None), first):
+        # time two streams take turns; one read from its start would decode every event before.
+        events = self.events
+        ordered = (
+            events.iter_from(first)
+            if isinstance(events, Spool)
+            else itertools.islice(events, first, None)
+        )
+        for index, event in enumerate(ordered, first):
             if speed > 0:
                 due = started + (times[index] - origin_ns) / NS_PER_SEC / speed
                 while (wait := due - time.monotonic()) > 0:

@@ -20,8 +20,6 @@ if TYPE_CHECKING:
 KEEPALIVE = ":keepalive\n\n"
 """The comment the fault stream sends when nothing happened for KEEPALIVE_INTERVAL_SEC."""
 KEEPALIVE_INTERVAL_SEC = 30
-BUFFERED_EVENTS = 100
-"""How many events the live stream keeps for a client resuming with Last-Event-ID."""
 _UINT64_DIGITS = 20  # longer ids are out of range, as for the gateway's stoull
 
 

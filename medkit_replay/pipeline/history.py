@@ -32,8 +32,9 @@ class HistoryRecorder:
             log.feed = self._logged(log.feed)  # type: ignore[method-assign,assignment]
         report, event, transition = manager.report_row, manager.event_row, manager.transition_row
         manager.set_row_sinks(self._report(report), event, self._transition(transition))
-        self._ticked, self._cleared = manager.cleanup_tick, manager.clear
-        manager.cleanup_tick = self._cleanup_tick  # type: ignore[method-assign]
+        # The cleanup timer is not watched: it drops pending roots and clusters, never a muted
+        # entry or an active cluster (the view recorded).
+        self._cleared = manager.clear
         manager.clear = self._clear  # type: ignore[method-assign]
 
     def _note(self, t_ns: int, code: str) -> None:
@@ -94,7 +95,3 @@ class HistoryRecorder:
             feed(t_ns, topic, msg, report)
 
         return logged
-
-    def _cleanup_tick(self, now_ns: int) -> None:
-        self._ticked(now_ns)
-        self._note_correlation(now_ns)

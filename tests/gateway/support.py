@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import httpx
 import uvicorn
 
+from medkit_replay.commands.serve import retain_on_clear
 from medkit_replay.evidence import EvidenceOptions, load_graph
 from medkit_replay.gateway.recording import served_recording
 from medkit_replay.history import FaultHistory
@@ -48,7 +49,8 @@ def serve_replay(
         evidence=EvidenceOptions(graph=node_graph, directory=clips),
         history=history,
     )
-    return served_recording(result, history, node_graph, at_sec)
+    retained = retain_on_clear(configs)
+    return served_recording(result, history, node_graph, at_sec, retain_on_clear=retained)
 
 
 def seconds(served: ServedRecording, t_ns: int) -> str:

@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.engine.correlation.engine import CorrelationEngine
 from medkit_replay.history import CorrelationState, FaultHistory
-from medkit_replay.model import FaultSnapshot, MutedFault
+from medkit_replay.model import MutedFault
 from medkit_replay.pipeline import replay
+from tests.gateway import values
 
 if TYPE_CHECKING:
+    from medkit_replay.model import FaultSnapshot, Status
     from medkit_replay.result import Result
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -20,12 +24,8 @@ NAV2 = ROOT / "rules" / "nav2" / "fault_manager.yaml"
 END = 2**62
 
 
-def snapshot(code: str, status: str = "PREFAILED", count: int = 1) -> FaultSnapshot:
-    return FaultSnapshot(
-        fault_code=code, severity=2, description="", first_occurred_ns=1, last_occurred_ns=1,
-        last_passed_ns=0, occurrence_count=count, status=status,  # type: ignore[arg-type]
-        reporting_sources=("/a",), muted=False, root_cause_code=None, cluster_ids=(),
-    )  # fmt: skip
+def snapshot(code: str, status: Status = "PREFAILED", count: int = 1) -> FaultSnapshot:
+    return dataclasses.replace(values.fault(code, status), occurrence_count=count)
 
 
 def test_a_fault_is_unknown_before_it_is_reported_and_each_change_holds_from_its_time() -> None:
@@ -135,3 +135,22 @@ def test_the_nodes_seen_are_every_reporting_source_and_logging_node() -> None:
     reporters = {r.source_id for r in result.reports}
     assert loggers - reporters  # nodes that logged without a report are seen too
     assert history.sources == loggers | reporters
+
+
+def test_the_cleanup_timer_never_changes_the_correlation_view(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Why the history does not watch it: only reports and clears change the view recorded.
+    ticked = CorrelationEngine.cleanup_expired
+    ticks = []
+
+    def checked(engine: CorrelationEngine, now_ns: int) -> None:
+        before = (engine.muted_faults(), engine.clusters())
+        ticked(engine, now_ns)
+        assert (engine.muted_faults(), engine.clusters()) == before
+        ticks.append(now_ns)
+
+    monkeypatch.setattr(CorrelationEngine, "cleanup_expired", checked)
+    history = FaultHistory()
+    result = replay([MISSION], [NAV2], history=history)
+    assert ticks and result.muted_faults  # the timer ran with muted symptoms held

@@ -70,6 +70,21 @@ def test_the_real_server_answers_httpx_and_stops_cleanly_on_ctrl_c(tmp_path: Pat
     assert list(tmp_path.iterdir()) == []  # the temporary clip folder went with it
 
 
+def test_sigterm_stops_the_server_as_ctrl_c_does(tmp_path: Path) -> None:
+    # docker stop and systemd stop a service with SIGTERM: a normal stop, not a failure.
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    server, base = start([str(MISSION), "--config", str(NAV2), "--port", "0", "--quiet"], env)
+    try:
+        with httpx.Client(base_url=base, timeout=30) as client:
+            assert client.get("/api/v1/health").status_code == 200
+    finally:
+        server.send_signal(signal.SIGTERM)
+        _, rest = server.communicate(timeout=30)
+    assert server.returncode == 0
+    assert rest == "Stopped.\n"
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_an_address_already_taken_is_one_line_and_status_2(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import http.client
 import json
 import time
@@ -9,7 +10,11 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from medkit_replay.captures import SnapshotCapture, SnapshotTopic
 from medkit_replay.gateway.app import build_app
+from medkit_replay.gateway.stream import EventStream
+from medkit_replay.model import EVENT_ROWS, FaultEvent
+from medkit_replay.spool import Spool
 from tests.gateway.schemas import response_schema, validate
 from tests.gateway.support import MISSION, NAV2, running, seconds, serve_replay
 
@@ -372,3 +377,82 @@ def test_a_stream_a_client_closes_frees_its_slot(served: ServedRecording) -> Non
                     break
             assert time.monotonic() < deadline, "the closed stream's slot was never freed"
             time.sleep(0.1)
+
+
+def with_capture(served: ServedRecording, *, retained: bool) -> ServedRecording:
+    """``served`` with one freeze-frame capture of its first fault, taken at the start."""
+    topic = SnapshotTopic(
+        topic="/battery", message_type="std_msgs/msg/Float64", message_t_ns=served.origin_ns,
+        data={"data": 12.5},
+    )  # fmt: skip
+    capture = SnapshotCapture(
+        fault_code=served.history.faults_at(served.end_ns)[0].fault_code, capture_id=1,
+        t_ns=served.origin_ns, retained=retained, freeze_frame=True, topics=(topic,),
+    )  # fmt: skip
+    return dataclasses.replace(
+        served, result=dataclasses.replace(served.result, snapshots=(capture,))
+    )
+
+
+def served_snapshots(served: ServedRecording) -> list[dict[str, object]]:
+    """The detail route's snapshots of the first fault, from the app that reports it."""
+    code = served.history.faults_at(served.end_ns)[0].fault_code
+    with running(build_app(served, speed=0)) as client:
+        app = next(
+            a["id"]
+            for a in client.get("/api/v1/apps").json()["items"]
+            if any(
+                f["fault_code"] == code
+                for f in client.get(f"/api/v1/apps/{a['id']}/faults?status=all").json()["items"]
+            )
+        )
+        return client.get(f"/api/v1/apps/{app}/faults/{code}").json()["environment_data"][
+            "snapshots"
+        ]
+
+
+def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(
+    served: ServedRecording,
+) -> None:
+    # After a clear (retain_on_clear false) the manager drops the capture's rows but keeps
+    # its compact freeze frame: retained=False, freeze_frame=True.
+    frames = [s for s in served_snapshots(with_capture(served, retained=False))
+              if s["type"] == "freeze_frame"]  # fmt: skip
+    assert [(f["name"], f["data"]) for f in frames] == [
+        ("freeze_frame", {"/battery": {"data": 12.5}})
+    ]
+
+
+def test_a_spilled_stream_resumes_from_any_event(served: ServedRecording) -> None:
+    events: Spool[FaultEvent] = Spool(3, codec=EVENT_ROWS)
+    for event in served.result.events:
+        events.append(event)
+    spilled = dataclasses.replace(served, result=dataclasses.replace(served.result, events=events))
+    assert EventStream(spilled, speed=0, max_clients=2).times == [e.t_ns for e in events]
+    total = len(events)
+    with running(build_app(spilled, speed=0)) as client:
+        for after in (0, 4, 5, total - 1, total):
+            answer = client.get("/api/v1/faults/stream", headers={"Last-Event-ID": str(after)})
+            frames = sse_frames(answer.text)
+            assert [int(f["id"]) for f in frames] == list(range(after + 1, total + 1))
+            codes = [json.loads(f["data"])["fault"]["fault_code"] for f in frames]
+            assert codes == [e.fault.fault_code for e in served.result.events][after:]
+
+
+def test_retain_on_clear_serves_the_compact_frame_beside_the_rows(
+    served: ServedRecording, tmp_path: Path
+) -> None:
+    retain = tmp_path / "retain.yaml"
+    retain.write_text(
+        "fault_manager:\n  ros__parameters:\n    snapshots:\n      retain_on_clear: true\n"
+    )
+    assert serve_replay([MISSION], [NAV2, retain]).retain_on_clear
+    assert not served.retain_on_clear
+    held = with_capture(served, retained=True)
+    names = {
+        retained: [
+            s["name"] for s in served_snapshots(dataclasses.replace(held, retain_on_clear=retained))
+        ]
+        for retained in (False, True)
+    }
+    assert names == {False: ["battery"], True: ["battery", "freeze_frame"]}
