@@ -146,8 +146,6 @@ def write_reports(
     def job(output: FileOutput, target: Path, writer: Writer) -> Job:
         def write() -> None:
             with writing(output.label, target):
-                if output.files is None:  # a file: its folder is made, as --csv makes its own
-                    target.parent.mkdir(parents=True, exist_ok=True)
                 writer(result, target)
 
         return output.label, write
@@ -170,7 +168,6 @@ def write_reports(
                 write_report_stdout(result, ahead)
         elif json_out is not None:
             with writing("report", json_out):
-                Path(json_out).parent.mkdir(parents=True, exist_ok=True)
                 write_report(result, Path(json_out), ahead)
     if json_out is None or not chosen:
         for _, write in jobs:
