@@ -11,11 +11,9 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
-from datetime import UTC, datetime
 from importlib import resources
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_evidence import evidence_section
 from medkit_replay.outputs.html_tables import (
@@ -38,6 +36,7 @@ from medkit_replay.outputs.html_timeline import (
     page_data,
 )
 from medkit_replay.outputs.muting import NO_EVENTS, event_counts, muting_sentence
+from medkit_replay.outputs.times import utc_date
 from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
@@ -47,7 +46,6 @@ if TYPE_CHECKING:
     from medkit_replay.outputs.html_timeline import Lane
     from medkit_replay.result import Result
 
-EPOCH_LIKE_NS = 10**17
 AXIS_TICKS = 10  # ticks drawn without JavaScript; the script redraws them for each zoom
 
 
@@ -74,15 +72,8 @@ def _pct(value: float) -> str:
 
 
 def _utc(t_ns: int) -> str:
-    # Only for clock-like stamps (after 1973); scripts often count from zero.
-    if t_ns < EPOCH_LIKE_NS:
-        return ""
-    try:
-        moment = datetime.fromtimestamp(t_ns // NS_PER_SEC, tz=UTC)
-    except (OverflowError, ValueError, OSError):  # beyond what a date can show (year 10000)
-        return ""
-    stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
-    return f" ({stamp}.{t_ns % NS_PER_SEC // 1_000_000:03d} UTC)"
+    date = utc_date(t_ns)
+    return f" ({date})" if date else ""
 
 
 def _n(count: int, noun: str) -> str:
