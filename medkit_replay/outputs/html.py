@@ -11,11 +11,11 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
-from importlib import resources
 from typing import TYPE_CHECKING
 
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_evidence import evidence_section
+from medkit_replay.outputs.html_page import asset
 from medkit_replay.outputs.html_tables import (
     CELL_CAP,
     esc,
@@ -47,10 +47,6 @@ if TYPE_CHECKING:
     from medkit_replay.result import Result
 
 AXIS_TICKS = 10  # ticks drawn without JavaScript; the script redraws them for each zoom
-
-
-def _asset(name: str) -> str:
-    return (resources.files("medkit_replay.outputs") / "html_assets" / name).read_text("utf-8")
 
 
 def script_json(value: object) -> str:
@@ -348,7 +344,7 @@ def render_html(result: Result) -> str:
     """The whole page as text; the same Result always gives the same text."""
     span = Span.of(result)
     lanes = build_lanes(result, span)
-    script = _asset("report.js")
+    script = asset("report.js")
     digest = base64.b64encode(hashlib.sha256(script.encode("utf-8")).digest()).decode("ascii")
     csp = (
         "default-src 'none'; img-src data:; style-src 'unsafe-inline'; "
@@ -360,7 +356,7 @@ def render_html(result: Result) -> str:
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<meta http-equiv="Content-Security-Policy" content="{csp}">'
         '<meta name="referrer" content="no-referrer">'
-        f"<title>medkit-replay — {esc(title)}</title><style>{_asset('report.css')}</style>"
+        f"<title>medkit-replay — {esc(title)}</title><style>{asset('report.css')}</style>"
         '</head><body><div id="js-errors" hidden></div><main>'
         + _header(result, span)
         + _timeline(result, lanes, span)
