@@ -417,6 +417,10 @@ class RecordLog(Protocol[T]):
     def __getitem__(self, index: int, /) -> T: ...
 
 
+EventTally = tuple[dict[str, dict[str, int]], dict[str, dict[str, int]]]
+"""Per fault code, its FaultEvents by kind: (published, withheld by correlation muting)."""
+
+
 @dataclass(slots=True, kw_only=True)
 class EngineOutput:
     """Everything the engine produced during one replay, in production order."""
@@ -430,6 +434,9 @@ class EngineOutput:
     # Running counts, so that a summary never has to read spooled records back.
     event_counts: dict[str, int] = field(default_factory=dict)
     reports_accepted: int = 0
+    # Per fault code, its FaultEvents by kind: published, and withheld by correlation muting.
+    published_by_code: dict[str, dict[str, int]] = field(default_factory=dict)
+    withheld_by_code: dict[str, dict[str, int]] = field(default_factory=dict)
 
 
 Phase = Literal["prescan", "replay"]

@@ -197,11 +197,7 @@ def foreign_clips(refused: Sequence[str], *, outputs: bool) -> MedkitReplayError
 
     first, *others = refused
     more = f" ({len(others):,} more folders alike)" if others else ""
-    written = (
-        "no recording was written, the other outputs were"
-        if outputs
-        else ("no recording was written")
-    )
+    written = "no recording was written" + (", the other outputs were" if outputs else "")
     return MedkitReplayError(
         f"has a clip's name but is not a clip this tool wrote (no {MARKER} in it){more}; "
         f"{written}: write the clips to another folder",

@@ -19,27 +19,10 @@ from medkit_replay.outputs import OUTPUTS, FileOutput
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping, Sequence
 
-    from medkit_replay.commands import PathKind
     from medkit_replay.outputs.json_report import EncodedAhead
     from medkit_replay.result import Result
 
     Writer = Callable[[Result, Path], object]
-
-_FILE_OPTIONS: tuple[tuple[str, PathKind, str], ...] = (
-    ("--csv", "any", "Write every report table as CSV into this directory."),
-    (
-        "--parquet",
-        "any",
-        "Write every report table as Parquet into this directory (needs the 'parquet' extra).",
-    ),
-    ("--mcap", "file", "Write the replayed FaultEvents and status changes as an MCAP recording."),
-    (
-        "--html",
-        "file",
-        "Write a self-contained HTML report (fault timeline, counter traces, correlation).",
-    ),
-)
-"""The file outputs' options (``outputs.OUTPUTS`` holds their writers): option, path kind, help."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,7 +44,7 @@ def report_options(command: Callable[..., None]) -> Callable[..., None]:
 
     @functools.wraps(command)
     def with_targets(*args: Any, report_json: str | None, **kwargs: Any) -> None:
-        paths = {option: kwargs.pop(_dest(option)) for option, _, _ in _FILE_OPTIONS}
+        paths = {output.option: kwargs.pop(_dest(output.option)) for output in OUTPUTS}
         command(*args, reports=ReportTargets(report_json, paths), **kwargs)
 
     json_option = click.option(
@@ -73,8 +56,13 @@ def report_options(command: Callable[..., None]) -> Callable[..., None]:
         help="Write the JSON report here ('-': standard output; FILE.gz or FILE.zst compressed).",
     )
     file_options = (
-        path_option(option, _dest(option), kind=kind, help=text)
-        for option, kind, text in _FILE_OPTIONS
+        path_option(
+            output.option,
+            _dest(output.option),
+            kind="file" if output.files is None else "any",
+            help=output.help,
+        )
+        for output in OUTPUTS
     )
     return stacked(json_option, *file_options)(with_targets)
 
@@ -146,8 +134,6 @@ def write_reports(
     def job(output: FileOutput, target: Path, writer: Writer) -> Job:
         def write() -> None:
             with writing(output.label, target):
-                if output.files is None:  # a file: its folder is made, as --csv makes its own
-                    target.parent.mkdir(parents=True, exist_ok=True)
                 writer(result, target)
 
         return output.label, write
@@ -170,7 +156,6 @@ def write_reports(
                 write_report_stdout(result, ahead)
         elif json_out is not None:
             with writing("report", json_out):
-                Path(json_out).parent.mkdir(parents=True, exist_ok=True)
                 write_report(result, Path(json_out), ahead)
     if json_out is None or not chosen:
         for _, write in jobs:

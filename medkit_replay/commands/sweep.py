@@ -159,7 +159,6 @@ def sweep(
         from medkit_replay.tuning.page import write_page  # noqa: PLC0415  # only when asked
 
         with writing("the page", html_path):
-            html_path.parent.mkdir(parents=True, exist_ok=True)
             write_page(html_path, grid, outcome, len(recordings))
     if not quiet:
         with standard_output("the sweep summary"):

@@ -231,6 +231,8 @@ class FaultManager:
                 kind = "fault_updated" if again else "fault_confirmed"
                 if muted:
                     withheld, kind = kind, None
+                    counts = output.withheld_by_code.setdefault(fault_code, {})
+                    counts[withheld] = counts.get(withheld, 0) + 1
             report_row(
                 (t_ns, origin, topic, fault_code, name, severity, description, source_id,
                  True, None, fault.status, fault.counter, conf, heal, withheld)
@@ -343,6 +345,8 @@ class FaultManager:
         counts = self.output.event_counts
         counts[kind] = counts.get(kind, 0) + 1
         code = fault.fault_code
+        counts = self.output.published_by_code.setdefault(code, {})
+        counts[kind] = counts.get(kind, 0) + 1
         correlation = self.correlation
         if correlation is not None:
             entry = correlation.muted_entry(code)

@@ -273,7 +273,6 @@ def render_html(
     return (
         page_start(
             "medkit-replay fleet report",
-            "medkit-replay fleet report",
             f"medkit-replay {html.escape(__version__)} · click a column heading to sort",
         )
         + cards({key.replace("_", " "): value for key, value in counts.items()})

@@ -52,21 +52,45 @@ def _table_files(suffix: str) -> Callable[[Path], list[Path]]:
 
 @dataclass(frozen=True, slots=True)
 class FileOutput:
-    """One file output: its option, its name in messages, and how to get its writer.
+    """One file output: its option, its name in messages, how to get its writer, its help.
 
     ``load`` imports the writer (and says now, before a long replay, when an optional
-    dependency is missing); ``files`` lists what a directory output writes into its directory.
+    dependency is missing); ``files`` lists what a directory output writes into its directory
+    (its option then takes a folder or a file's name, the others a file).
     """
 
     option: str
     label: str
     load: Callable[[], Callable[[Result, Path], object]]
+    help: str
     files: Callable[[Path], list[Path]] | None = None
 
 
 OUTPUTS: tuple[FileOutput, ...] = (
-    FileOutput("--csv", "CSV", _csv, _table_files(".csv")),
-    FileOutput("--parquet", "Parquet", _parquet, _table_files(".parquet")),
-    FileOutput("--mcap", "MCAP", _mcap),
-    FileOutput("--html", "HTML", _html),
+    FileOutput(
+        "--csv",
+        "CSV",
+        _csv,
+        "Write every report table as CSV into this directory.",
+        _table_files(".csv"),
+    ),
+    FileOutput(
+        "--parquet",
+        "Parquet",
+        _parquet,
+        "Write every report table as Parquet into this directory (needs the 'parquet' extra).",
+        _table_files(".parquet"),
+    ),
+    FileOutput(
+        "--mcap",
+        "MCAP",
+        _mcap,
+        "Write the replayed FaultEvents and status changes as an MCAP recording.",
+    ),
+    FileOutput(
+        "--html",
+        "HTML",
+        _html,
+        "Write a self-contained HTML report (fault timeline, counter traces, correlation).",
+    ),
 )

@@ -74,8 +74,9 @@ def remove_partials(targets: Iterable[Path], pid: int) -> None:
 def atomic_binary(target: Path) -> Iterator[IO[bytes]]:
     """Open ``target`` for binary writing through a temporary file renamed into place on success.
 
-    A device or FIFO target (/dev/null, /dev/stdout) is written in place. On any exception,
-    Ctrl-C or termination signal, the temporary file is removed and the old target is kept.
+    A device or FIFO target (/dev/null, /dev/stdout) is written in place; a file's folder is
+    made (with its parents) when missing. On any exception, Ctrl-C or termination signal, the
+    temporary file is removed and the old target is kept.
     """
     target = Path(target)
     if _is_special(target):
@@ -84,6 +85,7 @@ def atomic_binary(target: Path) -> Iterator[IO[bytes]]:
         return
     if target.is_dir():
         raise IsADirectoryError(21, "Is a directory", str(target))
+    target.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(
         prefix=_partial_prefix(target, os.getpid()), suffix=_PARTIAL, dir=target.parent
     )

@@ -11,13 +11,11 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
-from datetime import UTC, datetime
-from importlib import resources
 from typing import TYPE_CHECKING
 
-from medkit_replay.model import NS_PER_SEC
 from medkit_replay.outputs.atomic import atomic_text
 from medkit_replay.outputs.html_evidence import evidence_section
+from medkit_replay.outputs.html_page import asset
 from medkit_replay.outputs.html_tables import (
     CELL_CAP,
     esc,
@@ -38,6 +36,7 @@ from medkit_replay.outputs.html_timeline import (
     page_data,
 )
 from medkit_replay.outputs.muting import NO_EVENTS, event_counts, muting_sentence
+from medkit_replay.outputs.times import utc_date
 from medkit_replay.result import EVENT_KINDS, STATUSES, release_line
 from medkit_replay.text import WARNING_CAP, clip, seconds, severity_name
 
@@ -47,12 +46,7 @@ if TYPE_CHECKING:
     from medkit_replay.outputs.html_timeline import Lane
     from medkit_replay.result import Result
 
-EPOCH_LIKE_NS = 10**17
 AXIS_TICKS = 10  # ticks drawn without JavaScript; the script redraws them for each zoom
-
-
-def _asset(name: str) -> str:
-    return (resources.files("medkit_replay.outputs") / "html_assets" / name).read_text("utf-8")
 
 
 def script_json(value: object) -> str:
@@ -74,15 +68,8 @@ def _pct(value: float) -> str:
 
 
 def _utc(t_ns: int) -> str:
-    # Only for clock-like stamps (after 1973); scripts often count from zero.
-    if t_ns < EPOCH_LIKE_NS:
-        return ""
-    try:
-        moment = datetime.fromtimestamp(t_ns // NS_PER_SEC, tz=UTC)
-    except (OverflowError, ValueError, OSError):  # beyond what a date can show (year 10000)
-        return ""
-    stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
-    return f" ({stamp}.{t_ns % NS_PER_SEC // 1_000_000:03d} UTC)"
+    date = utc_date(t_ns)
+    return f" ({date})" if date else ""
 
 
 def _n(count: int, noun: str) -> str:
@@ -357,7 +344,7 @@ def render_html(result: Result) -> str:
     """The whole page as text; the same Result always gives the same text."""
     span = Span.of(result)
     lanes = build_lanes(result, span)
-    script = _asset("report.js")
+    script = asset("report.js")
     digest = base64.b64encode(hashlib.sha256(script.encode("utf-8")).digest()).decode("ascii")
     csp = (
         "default-src 'none'; img-src data:; style-src 'unsafe-inline'; "
@@ -369,7 +356,7 @@ def render_html(result: Result) -> str:
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<meta http-equiv="Content-Security-Policy" content="{csp}">'
         '<meta name="referrer" content="no-referrer">'
-        f"<title>medkit-replay — {esc(title)}</title><style>{_asset('report.css')}</style>"
+        f"<title>medkit-replay — {esc(title)}</title><style>{asset('report.css')}</style>"
         '</head><body><div id="js-errors" hidden></div><main>'
         + _header(result, span)
         + _timeline(result, lanes, span)

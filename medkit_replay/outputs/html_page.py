@@ -60,15 +60,16 @@ def asset(name: str) -> str:
     return (resources.files("medkit_replay.outputs") / "html_assets" / name).read_text("utf-8")
 
 
-def page_start(title: str, heading: str, sub: str, extra_style: str = "") -> str:
+def page_start(title: str, sub: str, extra_style: str = "") -> str:
     """The page up to its first section: head (analyze's stylesheet, then ``extra_style``),
-    the heading and one line under it (``sub``, already HTML)."""
+    ``title`` as the window's title and the heading, and one line under it (``sub``, already
+    HTML)."""
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         '<meta name="referrer" content="no-referrer">'
         f"<title>{esc(title)}</title><style>{asset('report.css')}{_PAGE_STYLE}{extra_style}"
-        f'</style></head><body><main><header class="top"><h1>{esc(heading)}</h1>'
+        f'</style></head><body><main><header class="top"><h1>{esc(title)}</h1>'
         f'<p class="sub">{sub}</p></header>\n'
     )
 

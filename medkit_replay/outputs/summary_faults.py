@@ -15,7 +15,8 @@ from rich.text import Text
 
 from medkit_replay.outputs.muting import NO_EVENTS, MutedEvents, event_counts, events_words
 from medkit_replay.outputs.summary_lines import Piece, fixed, free, listing, piece, words
-from medkit_replay.text import clip, printable, seconds, severity_name
+from medkit_replay.outputs.times import from_start
+from medkit_replay.text import clip, printable, severity_name
 
 if TYPE_CHECKING:
     from medkit_replay.model import FaultSnapshot, MutedFault
@@ -44,11 +45,6 @@ def show(value: object, limit: int = MAX_TEXT) -> str:
     nothing a recording holds can move the cursor, recolour or reorder the screen; cut at
     ``limit`` characters with an ellipsis and the count of characters left out."""
     return printable(clip(str(value), limit))
-
-
-def seconds_at(t_ns: int, origin_ns: int) -> str:
-    """A bag time as seconds from the recording's start, the one format people read."""
-    return f"{seconds(t_ns - origin_ns)} s"
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,7 +96,7 @@ def worst_first(faults: tuple[FaultSnapshot, ...], facts: Facts) -> list[FaultSn
 def story(steps: list[tuple[str, int]], origin_ns: int, width: int, everything: bool) -> str:
     """``confirmed 65.751 s → healed 70.750 s → …`` within ``width``: as many changes as fit,
     then ``+N more`` with the count of each change left out."""
-    told = [f"{STORY_STATUSES[status]} {seconds_at(t, origin_ns)}" for status, t in steps]
+    told = [f"{STORY_STATUSES[status]} {from_start(t, origin_ns)}" for status, t in steps]
     shown = len(told)
     if not everything:
         while shown > 1 and len(_story(told, steps, shown)) > width:
@@ -201,8 +197,8 @@ def fault_lines(
         told = story(steps, origin_ns, width - 2, everything)
     else:
         told = (
-            f"reported failing {seconds_at(fault.first_occurred_ns, origin_ns)} to "
-            f"{seconds_at(fault.last_occurred_ns, origin_ns)}, never confirmed"
+            f"reported failing {from_start(fault.first_occurred_ns, origin_ns)} to "
+            f"{from_start(fault.last_occurred_ns, origin_ns)}, never confirmed"
         )
     lines.append(fixed("  " + told))
     near = facts.near_misses.get(fault.fault_code, 0)

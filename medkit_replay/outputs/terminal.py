@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import re
 import sys
-from datetime import UTC, datetime
 from typing import TYPE_CHECKING, TextIO
 
 from rich import box
@@ -30,11 +29,11 @@ from medkit_replay.outputs.summary_faults import (
     fault_lines,
     gather,
     heading,
-    seconds_at,
     show,
     worst_first,
 )
 from medkit_replay.outputs.summary_lines import fixed, free, listing, piece, words
+from medkit_replay.outputs.times import from_start, start_text
 from medkit_replay.result import release_line
 from medkit_replay.text import WARNING_CAP, seconds
 
@@ -54,8 +53,6 @@ MAX_WARNING = WARNING_CAP
 """Characters of a warning (or a path) shown; the JSON report has it whole."""
 MAX_EVIDENCE_LINES = 3
 """Freeze-frame captures and recordings listed each by default; the rest are counted."""
-EPOCH_FLOOR_NS = 10**18
-"""Bag times from here on (2001-09-09) are shown as UTC dates; smaller ones are script times."""
 _CORRELATION_OFF = re.compile(r"correlation (is off|is disabled)", re.IGNORECASE)
 _CORRELATION_ERROR = re.compile(r"correlation config error", re.IGNORECASE)
 
@@ -108,17 +105,6 @@ def _duration(ns: int) -> str:
     return f"{hours} h {minutes:02d} min {secs:02d}.{millis:03d} s" if hours else text
 
 
-def _start_text(t_ns: int) -> str:
-    if t_ns >= EPOCH_FLOOR_NS:
-        try:
-            moment = datetime.fromtimestamp(t_ns // 10**9, tz=UTC)
-        except (OverflowError, ValueError, OSError):  # past what a date can show (year 10000)
-            return f"t = {t_ns // 10**9:,} s"
-        stamp = moment.strftime("%Y-%m-%d %H:%M:%S")
-        return f"{stamp}.{(t_ns % 10**9) // 10**6:03d} UTC"
-    return f"t = {seconds(t_ns)} s"
-
-
 def _header(
     result: Result,
     span: tuple[int | None, int | None],
@@ -158,7 +144,7 @@ def _header(
                 piece("recording: "),
                 piece(_duration(end_ns - start_ns), "bold", whole=True),
                 piece(" of bag time from "),
-                piece(_start_text(start_ns), whole=True),
+                piece(start_text(start_ns, whole_beyond=True), whole=True),
             ],
             width,
         )
@@ -247,9 +233,9 @@ def _clusters(result: Result, origin_ns: int, width: int, everything: bool) -> l
             [
                 piece(show(cluster.cluster_id), "blue", whole=True),
                 piece(f" ({show(cluster.rule_name or cluster.rule_id)}), "),
-                piece(seconds_at(cluster.first_at_ns, origin_ns), whole=True),
+                piece(from_start(cluster.first_at_ns, origin_ns), whole=True),
                 piece(" to "),
-                piece(seconds_at(cluster.last_at_ns, origin_ns) + ",", whole=True),
+                piece(from_start(cluster.last_at_ns, origin_ns) + ",", whole=True),
                 piece(f" {_plural(cluster.count, 'fault')}, represented by "),
                 piece(representative, "bold", whole=True),
             ],
@@ -307,7 +293,7 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
         ]
         lines += words(
             [
-                piece(seconds_at(capture.t_ns, origin_ns), whole=True),
+                piece(from_start(capture.t_ns, origin_ns), whole=True),
                 piece(" "),
                 piece(show(capture.fault_code), "bold", whole=True),
                 piece(f" capture {capture.capture_id}: "),
@@ -318,8 +304,8 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
         )
     for recording in recordings[:limit]:
         line = Text(
-            f"  {seconds_at(recording.start_ns, origin_ns)} to "
-            f"{seconds_at(recording.end_ns, origin_ns)}  "
+            f"  {from_start(recording.start_ns, origin_ns)} to "
+            f"{from_start(recording.end_ns, origin_ns)}  "
         )
         line.append(show(recording.recording_id), style="bold")
         size = recording.bytes
@@ -327,7 +313,7 @@ def _evidence(result: Result, origin_ns: int, width: int, everything: bool) -> G
         line.append(f"  {recording.messages} msg, {shown}")
         lines.append(fixed(line))
         if recording.deleted_reason is not None:
-            at = seconds_at(recording.deleted_ns or 0, origin_ns)
+            at = from_start(recording.deleted_ns or 0, origin_ns)
             gone = [piece(f"deleted at {at}:", "yellow", whole=True), piece(" ")]
             gone.append(piece(show(recording.deleted_reason)))
             lines += words(gone, width, indent=4, hang=6)

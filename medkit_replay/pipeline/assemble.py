@@ -83,4 +83,8 @@ def assemble_result(
         summary=summary,
         config=config,
         consumed=consumed,
+        event_tally=(
+            {code: dict(kinds) for code, kinds in output.published_by_code.items()},
+            {code: dict(kinds) for code, kinds in output.withheld_by_code.items()},
+        ),
     )

@@ -223,7 +223,7 @@ def render_page(grid: Grid, outcome: Outcome, inputs: int) -> str:
         "column heading to sort"
     )
     return (
-        page_start("medkit-replay sweep", "medkit-replay sweep", sub, _EXTRA_STYLE)
+        page_start("medkit-replay sweep", sub, _EXTRA_STYLE)
         + cards(facts)
         + f"<h2>Grid</h2>\n<ul>{varied}</ul>\n"
         "<h2>Trade-off across variants</h2>\n"

@@ -233,7 +233,9 @@ def test_junit_holds_any_recorded_text(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_junit_write_error_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    status, _, err = check(tmp_path, PASSING, capsys, "--junit", str(tmp_path / "no" / "x.xml"))
+    blocker = tmp_path / "blocker"  # a missing folder is made (tests/commands); not this one
+    blocker.write_text("", encoding="utf-8")
+    status, _, err = check(tmp_path, PASSING, capsys, "--junit", str(blocker / "x.xml"))
     assert status == 2
     assert "cannot write JUnit XML" in err
 

@@ -235,9 +235,11 @@ def test_json_output(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None
     status, out, _ = run(["diff", str(a), str(b), "--json", str(target)], capsys)
     assert status == 1 and "reports differ" in out
     assert json.loads(target.read_text(encoding="utf-8")) == document
+    blocker = tmp_path / "blocker"
+    blocker.write_text("", encoding="utf-8")
     status, _, err = run(
-        ["diff", str(a), str(b), "--json", str(tmp_path / "no" / "d.json")], capsys
-    )
+        ["diff", str(a), str(b), "--json", str(blocker / "d.json")], capsys
+    )  # a missing folder is made (tests/commands); one where a file is cannot be
     assert status == 2 and "cannot write diff" in err
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -14,7 +16,7 @@ import pytest
 
 from medkit_replay.explaining import build_story, render_story
 from medkit_replay.model import SEVERITY_NAMES
-from medkit_replay.outputs.html import render_html
+from medkit_replay.outputs.html import _utc as html_utc, render_html
 from medkit_replay.outputs.json_report import dumps
 from medkit_replay.outputs.parquet import write_parquet
 from medkit_replay.outputs.tables import (
@@ -107,3 +109,34 @@ def test_html_and_explain_count_from_the_same_start(mission: Result) -> None:
     assert f"s from the start, {start_text(start)}" in text
     first = next(t for t in mission.transitions if t.fault_code == code)
     assert f" {seconds(first.t_ns - start)} " in text
+
+
+def test_bag_times_have_one_home_without_rich() -> None:
+    """outputs/times.py holds the cut-off and the formats; importing it loads no rich."""
+    code = (
+        "import sys; from medkit_replay.outputs import times; "
+        "print(times.EPOCH_FLOOR_NS, 'rich' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == [str(10**18), "False"]
+
+
+DATE = "2023-11-14 22:13:20.123 UTC"
+
+
+@pytest.mark.parametrize(
+    ("t_ns", "summary", "page"),
+    [
+        (1_700_000_000_123_456_789, DATE, f" ({DATE})"),
+        (5 * 10**17, "t = 500000000.000 s", ""),  # 1985: the page now agrees with the summary
+        (
+            300_000_000_000 * 10**9,
+            "t = 300,000,000,000 s",
+            "",
+        ),  # past year 10000: whole seconds, grouped
+        (12_500_000_000, "t = 12.500 s", ""),
+    ],
+)
+def test_the_start_is_said_alike(t_ns: int, summary: str, page: str) -> None:
+    assert start_text(t_ns, whole_beyond=True) == summary
+    assert html_utc(t_ns) == page

@@ -1,0 +1,44 @@
+"""The engine's count of each fault's FaultEvents, published and withheld, is the one the records
+say, and the terminal summary draws muting from it without reading the spooled records back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from medkit_replay.outputs.muting import event_counts
+from medkit_replay.outputs.terminal import render_summary
+from medkit_replay.pipeline import replay
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+
+    from medkit_replay.model import FaultEvent, ReportRecord
+
+ROOT = Path(__file__).resolve().parents[2]
+MISSION = ROOT / "sample_bags" / "nav2_mission_mcap"
+RULES = [ROOT / "rules" / "nav2" / "fault_manager.yaml", ROOT / "rules" / "nav2" / "bridges.yaml"]
+
+
+class Unread(list):  # type: ignore[type-arg]
+    """Records an output must not read back (their length is free, as a spool's is)."""
+
+    def __iter__(self) -> Iterator[FaultEvent | ReportRecord]:
+        raise AssertionError("the records were read back")
+
+
+def test_the_engine_counts_what_the_records_say() -> None:
+    result = replay([MISSION], RULES)
+    assert result.event_tally is not None
+    counted = event_counts(replace(result, event_tally=None))
+    assert any(events.withheld for events in counted.values())  # the sample mutes
+    assert event_counts(result) == counted
+
+
+def test_muting_is_drawn_without_reading_the_records_back() -> None:
+    result = replay([MISSION], RULES)
+    assert result.muted_faults
+    unread = replace(result, events=Unread(result.events), reports=Unread(result.reports))
+    assert render_summary(unread, everything=True) == render_summary(result, everything=True)
