@@ -64,7 +64,12 @@ def test_iter_from_reads_no_chunk_before_its_start(monkeypatch: pytest.MonkeyPat
         items.append(i)
     read: list[int] = []
     chunk = items._chunk
-    monkeypatch.setattr(items, "_chunk", lambda index: read.append(index) or chunk(index))
+
+    def logged(index: int) -> list[object]:
+        read.append(index)
+        return chunk(index)
+
+    monkeypatch.setattr(items, "_chunk", logged)
     assert list(items.iter_from(13)) == list(range(13, 20))
     assert read == [3, 4]
     items.close()

@@ -5,7 +5,7 @@ Messages go through on_message where the pipeline order of §3.1 matters; helper
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -426,7 +426,7 @@ def test_the_default_floor_is_warn_for_the_bridge_its_config_and_the_no_report_l
     assert LOG_LEVELS[LOG_LEVEL_WARN] == "WARN"
     assert LogBridgeConfig().severity_floor == LOG_LEVEL_WARN
     assert log_bridge_config({})[0].severity_floor == LOG_LEVEL_WARN
-    took = {
+    took: dict[str, Any] = {
         "messages_read": 3,
         "holds_messages": True,
         "diagnostics_topic": "/diagnostics",

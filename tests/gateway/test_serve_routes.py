@@ -406,9 +406,9 @@ def served_snapshots(served: ServedRecording) -> list[dict[str, object]]:
                 for f in client.get(f"/api/v1/apps/{a['id']}/faults?status=all").json()["items"]
             )
         )
-        return client.get(f"/api/v1/apps/{app}/faults/{code}").json()["environment_data"][
-            "snapshots"
-        ]
+        detail = client.get(f"/api/v1/apps/{app}/faults/{code}").json()
+    snapshots: list[dict[str, object]] = detail["environment_data"]["snapshots"]
+    return snapshots
 
 
 def test_a_cleared_capture_is_still_served_as_the_compact_freeze_frame(

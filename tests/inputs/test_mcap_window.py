@@ -133,6 +133,9 @@ class Counted:
     def forget(self, before: int) -> None:
         self.inner.forget(before)
 
+    def close(self) -> None:
+        self.inner.close()
+
     def __enter__(self) -> Counted:
         return self
 
