@@ -286,10 +286,9 @@ class Result:
     evidence_refused: tuple[str, ...] = ()
     """Clip folders left unwritten: the evidence folder held something else under their names
     (no clip was written then); not in the JSON report, which is the same either way."""
-    event_tally: EventTally | None = None
+    event_tally: EventTally = field(default_factory=lambda: ({}, {}))
     """Per fault code, its FaultEvents by kind (published, withheld) as the engine counted them,
-    so no output reads the spooled records back for them (None: count them from the records);
-    not in the JSON report."""
+    so no output reads the spooled records back for them; not in the JSON report."""
     losses: tuple[Loss, ...] = ()
     """What damage cost, one per damage warning (each also in ``warnings``, which say it); not
     in the JSON report as a key of its own."""

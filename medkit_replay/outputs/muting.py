@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from medkit_replay.model import EVENT_KINDS
 
 if TYPE_CHECKING:
-    from medkit_replay.model import EventTally, MutedFault
+    from medkit_replay.model import MutedFault
     from medkit_replay.result import Result
 
 
@@ -30,12 +30,8 @@ NO_EVENTS = MutedEvents(withheld={}, published={})
 
 def event_counts(result: Result) -> dict[str, MutedEvents]:
     """Per fault code, its withheld and published FaultEvents counted by type (upstream's
-    order): as the engine counted them, or (a Result without them) in one pass over the
-    report's records and events."""
-    if result.event_tally is not None:
-        published, withheld = result.event_tally
-    else:
-        published, withheld = _tally(result)
+    order), as the engine counted them (the spooled records are never read back for them)."""
+    published, withheld = result.event_tally
     order: dict[str, int] = {kind: i for i, kind in enumerate(EVENT_KINDS)}
 
     def ordered(counts: dict[str, int]) -> dict[str, int]:
@@ -47,19 +43,6 @@ def event_counts(result: Result) -> dict[str, MutedEvents]:
         )
         for code in sorted(withheld.keys() | published.keys())
     }
-
-
-def _tally(result: Result) -> EventTally:
-    withheld: dict[str, dict[str, int]] = {}
-    for report in result.reports:
-        if report.withheld_event is not None:
-            counts = withheld.setdefault(report.fault_code, {})
-            counts[report.withheld_event] = counts.get(report.withheld_event, 0) + 1
-    published: dict[str, dict[str, int]] = {}
-    for event in result.events:
-        counts = published.setdefault(event.fault.fault_code, {})
-        counts[event.event_type] = counts.get(event.event_type, 0) + 1
-    return published, withheld
 
 
 def _listed(counts: dict[str, int]) -> str:

@@ -101,6 +101,7 @@ def oracle_report(manager: FaultManager, request: ReportRequest) -> bool:
 def _event(manager: FaultManager, t_ns: int, kind: EventKind, fault: FaultRecord) -> None:
     counts = manager.output.event_counts
     counts[kind] = counts.get(kind, 0) + 1
+    _count(manager.output.published_by_code, fault.fault_code, kind)
     manager.output.events.append(
         FaultEvent(t_ns=t_ns, event_type=kind, fault=manager.snapshot(fault))
     )
@@ -117,6 +118,8 @@ def _record(
 ) -> None:
     if reason is None:
         manager.output.reports_accepted += 1
+    if withheld is not None:
+        _count(manager.output.withheld_by_code, request.fault_code, withheld)
     manager.output.reports.append(
         ReportRecord(
             t_ns=request.t_ns,
@@ -136,3 +139,8 @@ def _record(
             withheld_event=withheld,
         )
     )
+
+
+def _count(by_code: dict[str, dict[str, int]], code: str, kind: str) -> None:
+    counts = by_code.setdefault(code, {})
+    counts[kind] = counts.get(kind, 0) + 1

@@ -119,6 +119,8 @@ def state(manager: FaultManager) -> tuple[object, ...]:
         out.retroactive_mutes,
         out.warnings,
         out.event_counts,
+        out.published_by_code,
+        out.withheld_by_code,
         out.reports_accepted,
         manager.faults(),
         {code: list(series) for code, series in manager.storage.near_misses.items()},
