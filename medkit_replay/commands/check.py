@@ -165,7 +165,7 @@ def _check_group(
     except Exception as err:  # whatever the recording makes the replay raise: it failed
         text = one_line(err)
         error = f"{' + '.join(labels)}: {type(err).__name__}" + (f": {text}" if text else "")
-    return unreadable_run(budget, labels, " ".join(error.split()), release)
+    return unreadable_run(budget, labels, one_line(error), release)
 
 
 def _github(runs: list[CheckRun]) -> None:

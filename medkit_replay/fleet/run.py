@@ -202,12 +202,20 @@ def run_one(
         if problem is None:
             return summary
         error = f"{path}: {problem}"
-    error = " ".join(error.split())
+    return RunSummary(path=shown, kind=kind, error=row_error(error, str(path), label))
+
+
+def row_error(error: str, path: str, label: str | None, *, named_first: bool = False) -> str:
+    """A run's error as its row holds it: on one line, the input called ``label`` (as it was
+    given) where ``path`` stands, first when ``named_first``, cut to MAX_ERROR_CHARS."""
+    error = one_line(error)
     if label is not None:
-        error = error.replace(str(path), label)
+        error = error.replace(path, label)
+    if named_first and label is not None and not error.startswith(label):
+        error = f"{label}: {error}"
     if len(error) > MAX_ERROR_CHARS:
         error = error[: MAX_ERROR_CHARS - 1] + "…"
-    return RunSummary(path=shown, kind=kind, error=error)
+    return error
 
 
 def run_error(path: Path | str, error: Exception) -> str:

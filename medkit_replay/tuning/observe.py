@@ -13,6 +13,7 @@ from medkit_replay.errors import MedkitReplayError
 from medkit_replay.files import FileRefusedError
 from medkit_replay.fleet.run import describe_error, opened_recording
 from medkit_replay.pipeline import replay
+from medkit_replay.text import one_line
 
 if TYPE_CHECKING:
     from medkit_replay.result import Result
@@ -59,7 +60,7 @@ def _replayed(path: str, configs: tuple[str, ...]) -> Result | str:
     try:
         return replay([opened_recording(path)], list(configs))
     except MedkitReplayError as err:
-        return " ".join(err.render().split())
+        return one_line(err.render())
     except FileRefusedError as err:
         return f"{path}: {err}"
     except Exception as err:  # one input must not end the others

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from medkit_replay.config.params import load_parameters
 from medkit_replay.engine.manager import FaultManager
-from medkit_replay.fleet.run import MAX_ERROR_CHARS, opened_recording, run_error
+from medkit_replay.fleet.run import opened_recording, row_error, run_error
 from medkit_replay.model import EngineOutput, Loss, total_loss
 from medkit_replay.pipeline import replay_pass
 from medkit_replay.pipeline.assemble import assemble_result
@@ -186,10 +186,6 @@ def sweep_job(job: SweepJob) -> SweepPart:
 
 def failed_part(job: SweepJob, problem: str) -> SweepPart:
     """Every variant of the job failed, for this reason (one line, the input named as given)."""
-    error = " ".join(problem.split()).replace(job.path, job.label)
-    if not error.startswith(job.label):
-        error = f"{job.label}: {error}"
-    if len(error) > MAX_ERROR_CHARS:
-        error = error[: MAX_ERROR_CHARS - 1] + "…"
+    error = row_error(problem, job.path, job.label, named_first=True)
     runs = tuple(RunRow(variant=v.id, input=job.label, error=error) for v in job.variants)
     return SweepPart(runs, ())

@@ -162,3 +162,14 @@ def test_default_jobs_is_at_least_one() -> None:
 def test_failed_summary_of_a_lost_worker() -> None:
     run = fleet_run.failed_run(Path("x.mcap"), RuntimeError("worker\nlost"))
     assert run == RunSummary(path="x.mcap", kind="mcap", error="x.mcap: RuntimeError: worker lost")
+
+
+def test_a_row_error_is_one_line_naming_the_input_as_given_and_bounded() -> None:
+    path = "/abs/missions/run_7.mcap"
+    said = fleet_run.row_error(f"{path}: bad\n  chunk\tat 42", path, "missions/run_7.mcap")
+    assert said == "missions/run_7.mcap: bad chunk at 42"
+    config = "config.yaml:3: an unknown key"
+    assert fleet_run.row_error(config, path, "run_7") == config
+    assert fleet_run.row_error(config, path, "run_7", named_first=True) == f"run_7: {config}"
+    long = fleet_run.row_error("x" * 10_000, path, None)
+    assert len(long) == fleet_run.MAX_ERROR_CHARS and long.endswith("…")
