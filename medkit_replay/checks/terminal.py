@@ -13,14 +13,14 @@ from rich.console import Console
 from rich.text import Text
 
 from medkit_replay.model import read_in_part
-from medkit_replay.outputs.summary_lines import Flow, Piece, fixed, flow, piece, words
+from medkit_replay.outputs.summary_lines import Beside, Flow, flow, piece
 from medkit_replay.result import release_line
 from medkit_replay.text import WARNING_CAP, clip, printable
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
-    from rich.console import ConsoleOptions, RenderableType, RenderResult
+    from rich.console import RenderableType
 
     from medkit_replay.checks.evaluate import CheckRun, Verdict
 
@@ -38,14 +38,10 @@ Row = tuple[str, str, list[Flow]]
 """A mark (PASS, FAIL, ERROR, !), its style, and the lines beside it."""
 
 
-def _line(pieces: list[Piece]) -> Flow:
-    return Flow(pieces)
-
-
 def _verdict_row(verdict: Verdict) -> Row:
     mark, style = ("PASS", "bold green") if verdict.passed else ("FAIL", "bold red")
     lines = [
-        _line(
+        Flow(
             [
                 piece(printable(verdict.rule.name) + ":", "bold", whole=True),
                 piece(" " + printable(verdict.message)),
@@ -62,27 +58,15 @@ def _verdict_row(verdict: Verdict) -> Row:
     return (mark, style, lines)
 
 
-class _Marked:
-    """Rows of a mark then lines beside it, every line broken at spaces only (a code, a name
-    or a number whole, on a line of its own when wider than the line)."""
-
-    def __init__(self, rows: list[Row]):
-        self.rows = rows
-
-    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        size = max((len(mark) for mark, _, _ in self.rows), default=0)
-        room = max(options.max_width - size - 1, 1)
-        for mark, style, lines in self.rows:
-            for number, said in enumerate(lines):
-                laid = words(said.pieces, room, indent=said.indent, hang=said.hang)
-                for index, text in enumerate(laid):
-                    line = Text(
-                        f"{mark:<{size}} " if number == 0 and index == 0 else " " * (size + 1)
-                    )
-                    if number == 0 and index == 0:
-                        line.stylize(style, 0, len(mark))
-                    line.append_text(text)
-                    yield fixed(line)
+def _marked(rows: list[Row]) -> Beside:
+    """Each row's mark, styled and padded to the widest, then its lines beside it."""
+    size = max((len(mark) for mark, _, _ in rows), default=0)
+    leads = []
+    for mark, style, lines in rows:
+        lead = Text(f"{mark:<{size}} ")
+        lead.stylize(style, 0, len(mark))
+        leads.append((lead, lines))
+    return Beside(leads)
 
 
 def run_renderable(run: CheckRun) -> list[RenderableType]:
@@ -118,7 +102,7 @@ def run_renderable(run: CheckRun) -> list[RenderableType]:
         for loss in run.losses:
             total = printable(read_in_part(loss))
             rows.append(("!", "bold yellow", [flow(total, "bold yellow")]))
-    return [Flow(head), _Marked(rows), Text("")]
+    return [Flow(head), _marked(rows), Text("")]
 
 
 def conclusion(runs: Sequence[CheckRun]) -> Text:

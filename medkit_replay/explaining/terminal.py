@@ -13,13 +13,13 @@ from rich.console import Group
 from rich.text import Text
 
 from medkit_replay.outputs.console import draw, literal_console, plain_text
-from medkit_replay.outputs.summary_lines import Flow, Piece, fixed, piece, words
+from medkit_replay.outputs.summary_lines import Beside, Flow, Piece, fixed, piece
 from medkit_replay.outputs.times import EPOCH_FLOOR_NS, clock_time, start_text
 from medkit_replay.result import release_line
 from medkit_replay.text import clip, printable, seconds
 
 if TYPE_CHECKING:
-    from rich.console import Console, ConsoleOptions, RenderableType, RenderResult
+    from rich.console import RenderableType
 
     from medkit_replay.explaining.lines import Line
     from medkit_replay.explaining.story import Story
@@ -68,33 +68,19 @@ Entry = tuple[str, str, list[list[Piece]]]
 """Seconds from the start, the clock time, the line then its details."""
 
 
-class _Entries:
-    """The story's lines beside their times, every code, name and number whole: a line is
-    broken at spaces only (a word wider than the line whole on a line of its own)."""
-
-    def __init__(self, entries: list[Entry]):
-        self.entries = entries
-
-    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        at = max((len(t) for t, _, _ in self.entries), default=0)
-        clock = max((len(c) for _, c, _ in self.entries), default=0)
-        lead = at + 1 + (clock + 1 if clock else 0)
-        room = max(options.max_width - lead, 20)
-        for t, c, lines in self.entries:
-            for number, pieces in enumerate(lines):
-                laid = words(pieces, room, indent=2 if number else 0)
-                for index, body in enumerate(laid):
-                    line = Text()
-                    if number == 0 and index == 0:
-                        line.append(f"{t:>{at}} ")
-                        if clock:
-                            line.append(f"{c:<{clock}}", style="dim")
-                            line.append(" ")
-                    else:
-                        line.append(" " * lead)
-                    line.append_text(body)
-                    line.rstrip()
-                    yield fixed(line)
+def _beside_times(entries: list[Entry]) -> Beside:
+    """The story's lines beside their times (seconds right-aligned, then the clock time),
+    details indented under their line."""
+    at = max((len(t) for t, _, _ in entries), default=0)
+    clock = max((len(c) for _, c, _ in entries), default=0)
+    rows = []
+    for t, c, (line, *details) in entries:
+        lead = Text(f"{t:>{at}} ")
+        if clock:
+            lead.append(f"{c:<{clock}}", style="dim")
+            lead.append(" ")
+        rows.append((lead, [Flow(line), *(Flow(detail, indent=2) for detail in details)]))
+    return Beside(rows, least=20)
 
 
 def story_renderable(story: Story) -> Group:
@@ -121,7 +107,7 @@ def story_renderable(story: Story) -> Group:
         )
         for entry in story.entries
     ]
-    parts += [Text(""), _Entries(entries), Text("")]
+    parts += [Text(""), _beside_times(entries), Text("")]
     parts += [Flow(_pieces(line)) for line in story.state]
     return Group(*parts)
 

@@ -175,6 +175,27 @@ def flow(text: str, style: str = "", *, indent: int = 0, hang: int | None = None
     return Flow([piece(text, style)], indent=indent, hang=hang)
 
 
+class Beside:
+    """Rows of a lead (a mark, a time; every lead as wide) with lines laid out beside it by
+    :func:`words` when drawn: the lead on a row's first line, spaces of its width under it."""
+
+    def __init__(self, rows: Sequence[tuple[Text, Sequence[Flow]]], *, least: int = 1):
+        self.rows, self.least = list(rows), least
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        lead = max((len(head) for head, _ in self.rows), default=0)
+        room = max(options.max_width - lead, self.least)
+        for head, lines in self.rows:
+            first = True
+            for said in lines:
+                for text in words(said.pieces, room, indent=said.indent, hang=said.hang):
+                    line = head.copy() if first else Text(" " * lead)
+                    first = False
+                    line.append_text(text)
+                    line.rstrip()
+                    yield fixed(line)
+
+
 class Rows:
     """:func:`table` laid out when drawn, for the width of the console it is drawn on."""
 
